@@ -1,0 +1,19 @@
+"""The Blender layer: translates between Blender data and ``sh_lighting.core``; no math here.
+
+Each module exports ``register()``/``unregister()``; they are called in ``MODULES`` order
+and undone in reverse.
+"""
+
+from . import preferences
+
+MODULES = (preferences,)
+
+
+def register():
+    for module in MODULES:
+        module.register()
+
+
+def unregister():
+    for module in reversed(MODULES):
+        module.unregister()

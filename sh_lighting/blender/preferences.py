@@ -1,0 +1,31 @@
+"""Add-on preferences, keyed by ``__package__`` of the add-on so they work as an extension."""
+
+import bpy
+
+# "bl_ext.user_default.sh_lighting" when installed as an extension, "sh_lighting" in tests.
+ADDON_ID = __package__.rpartition(".")[0]
+
+
+class SHLIGHT_AddonPreferences(bpy.types.AddonPreferences):
+    bl_idname = ADDON_ID
+
+    capture_resolution: bpy.props.IntProperty(
+        name="World Capture Width",
+        description=(
+            "Width in pixels of the equirectangular image rendered to capture procedural "
+            "worlds (Sky Texture, gradients, mixes); the height is half of it"
+        ),
+        default=256,
+        min=16,
+        soft_max=2048,
+        subtype="PIXEL",
+    )
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(self, "capture_resolution")
+
+
+classes = (SHLIGHT_AddonPreferences,)
+register, unregister = bpy.utils.register_classes_factory(classes)

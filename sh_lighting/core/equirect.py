@@ -1,0 +1,108 @@
+"""Blender's equirectangular (latitude-longitude) mapping and the exact geometry of its texels.
+
+Conventions (REFERENCE.md §3, checked against Cycles renders):
+
+* a direction d = (x, y, z) in Blender world axes (z up) reads the image at
+  u = 0.5 - atan2(y, x) / 2π (wrapped to [0, 1)) and v = 1 - acos(z) / π, with v measured from
+  the bottom; the image centre faces +X and u = 0.25 faces +Y;
+* so with φ = atan2(y, x) and θ = acos(z): φ = π - 2πu and θ = π(1 - v);
+* arrays handed to the core are ``(H, W, C)`` with rows **top to bottom** (row 0 is θ ∈ [0, π/H],
+  the zenith); Blender's ``Image.pixels`` are bottom row first, so the Blender layer flips them;
+* texel (i, j) covers θ ∈ [iπ/H, (i+1)π/H] and φ ∈ [π - 2π(j+1)/W, π - 2πj/W]; its centre is
+  the direction of (i + ½, j + ½); its exact solid angle is (2π/W)(cos θ_i - cos θ_(i+1)).
+"""
+
+from math import pi
+
+import numpy as np
+
+
+def check_pixels(pixels):
+    """Validate an equirectangular radiance map and return it as an ndarray (no copy).
+
+    Accepts any H×W (not only 2:1) with 3 (RGB) or 4 (RGBA, alpha ignored) float channels.
+    Raises ValueError naming the problem and the fix.
+    """
+    a = np.asarray(pixels)
+    if a.ndim != 3 or a.shape[2] not in (3, 4):
+        raise ValueError(
+            f"pixels must have shape (H, W, 3) or (H, W, 4), got {a.shape}: pass an "
+            "equirectangular RGB or RGBA image, rows top to bottom"
+        )
+    if a.shape[0] == 0 or a.shape[1] == 0:
+        raise ValueError(f"pixels has zero size {a.shape}: the image has no texels")
+    if not np.issubdtype(a.dtype, np.floating):
+        raise ValueError(
+            f"pixels has dtype {a.dtype}, but the core takes linear float radiance: "
+            "convert to float (and from sRGB to linear) before projecting"
+        )
+    return a
+
+
+def describe_nonfinite(pixels, limit=5):
+    """Count the NaN/Inf RGB texels of ``pixels`` and name where the first few are."""
+    bad = ~np.isfinite(pixels[..., :3]).all(axis=-1)
+    rows, cols = np.nonzero(bad)
+    where = ", ".join(f"(row {r}, column {c})" for r, c in zip(rows[:limit], cols[:limit]))
+    more = f" and {len(rows) - limit} more" if len(rows) > limit else ""
+    return len(rows), f"{len(rows)} non-finite (NaN or Inf) texels at {where}{more}"
+
+
+def row_edges(height):
+    """θ at the H + 1 row boundaries, top (θ = 0) to bottom (θ = π)."""
+    return np.linspace(0.0, pi, height + 1)
+
+
+def row_centres(height):
+    """θ at the centre of each of the H rows, top to bottom."""
+    return (np.arange(height) + 0.5) * (pi / height)
+
+
+def column_centres(width):
+    """φ at the centre of each of the W columns: φ_j = π - 2π(j + ½)/W."""
+    return pi - (np.arange(width) + 0.5) * (2.0 * pi / width)
+
+
+def texel_solid_angles(height, width):
+    """Exact solid angle of one texel in each row, shape (H,); they sum to 4π over the image.
+
+    (2π/W)(cos θ_i - cos θ_(i+1)), written as (2π/W) · 2 sin θ_c sin(Δθ/2) so that thin rows
+    lose no digits to cancellation.
+    """
+    half = 0.5 * pi / height
+    return (2.0 * pi / width) * 2.0 * np.sin(row_centres(height)) * np.sin(half)
+
+
+def texel_directions(height, width):
+    """Unit direction of each texel centre, shape (H, W, 3), rows top to bottom."""
+    theta = row_centres(height)[:, None]
+    phi = column_centres(width)[None, :]
+    sin_t = np.sin(theta)
+    return np.stack(
+        np.broadcast_arrays(sin_t * np.cos(phi), sin_t * np.sin(phi), np.cos(theta)), axis=-1
+    )
+
+
+def direction_to_uv(directions):
+    """Blender's (u, v) of unit ``directions`` (..., 3): u in [0, 1), v in [0, 1] from the bottom."""
+    d = np.asarray(directions, dtype=np.float64)
+    u = np.mod(0.5 - np.arctan2(d[..., 1], d[..., 0]) / (2.0 * pi), 1.0)
+    v = 1.0 - np.arccos(np.clip(d[..., 2], -1.0, 1.0)) / pi
+    return u, v
+
+
+def uv_to_direction(u, v):
+    """Unit direction (..., 3) that Blender's Environment Texture looks up at (u, v)."""
+    phi = pi - 2.0 * pi * np.asarray(u, dtype=np.float64)
+    theta = pi * (1.0 - np.asarray(v, dtype=np.float64))
+    return np.stack(
+        [np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1
+    )
+
+
+def direction_to_texel(directions, height, width):
+    """(row, column) of the texel that holds each direction; rows counted top to bottom."""
+    u, v = direction_to_uv(directions)
+    col = np.minimum((u * width).astype(np.int64), width - 1)
+    row = np.minimum(((1.0 - v) * height).astype(np.int64), height - 1)
+    return row, col

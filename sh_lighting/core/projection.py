@@ -1,0 +1,121 @@
+"""Prefiltering: the lighting coefficients L_lm = ∫ L(ω) Y_lm(ω) dω of an equirectangular map (eq. 10).
+
+The map is taken as piecewise constant over its texels and every Y_lm is integrated exactly
+over every texel's area, not sampled at its centre. Each real SH separates as
+
+    Y_lm(θ, φ) = K_lm P_l^|m|(cos θ) · {1, cos mφ, sin |m|φ},
+
+so the integral over texel (i, j) is a row weight times a column weight:
+
+* row weight   w_l|m|[i] = ∫ K_lm P_l^|m|(cos θ) sin θ dθ over row i. The integrand is a
+  trigonometric polynomial of degree l + 1 in θ; its Fourier coefficients are found exactly
+  from l + 2 ... samples by an FFT and integrated in closed form;
+* column weight ∫ cos mφ dφ = (2 sin(m h) / m) cos(m φ_j) with h = π/W (sin likewise).
+
+The sum over texels is done as one GEMM per block of rows (rows against the row weights,
+accumulated in float64 whatever the input dtype), then a small product with the column
+weights. A constant map therefore gives exactly L00 = 2√π c and zeros elsewhere (to
+rounding), and replicating texels does not change the result.
+"""
+
+from math import pi
+
+import numpy as np
+
+from .equirect import check_pixels, column_centres, describe_nonfinite, row_centres
+from .sh import legendre_q, normalisation, num_coefficients, sh_index
+
+# Float64 rows per block are chosen so one block stays near this many bytes (cache-sized).
+BLOCK_BYTES = 4 << 20
+
+
+def _theta_functions(max_order):
+    """The (l, m >= 0) pairs whose θ parts the row weights integrate, in a fixed order."""
+    return [(l, m) for l in range(max_order + 1) for m in range(l + 1)]
+
+
+def row_weights(height, max_order=2):
+    """w[i, t] = ∫ K_lm P_l^m(cos θ) sin θ dθ over row i for each θ function t = (l, m >= 0).
+
+    Exact: f(θ) = K_lm Q_l^m(cos θ) sin^m θ sin θ is a trigonometric polynomial of degree
+    l + 1, so N > 2(l + 1) equispaced samples give its Fourier series a_k, b_k exactly, and
+    ∫ over [θ_c - Δ/2, θ_c + Δ/2] = a_0 Δ + Σ_k (2 sin(kΔ/2)/k)(a_k cos kθ_c + b_k sin kθ_c).
+    Returns shape (H, number of θ functions).
+    """
+    pairs = _theta_functions(max_order)
+    n = 4 * (max_order + 2)
+    t = 2.0 * pi * np.arange(n) / n
+    q = legendre_q(max_order, np.cos(t))
+    samples = np.stack(
+        [normalisation(l, m) * q[l, m] * np.sin(t) ** m * np.sin(t) for l, m in pairs]
+    )
+    spectrum = np.fft.rfft(samples, axis=1) / n
+    k = np.arange(1, max_order + 3)
+    a0 = spectrum[:, 0].real
+    a, b = 2.0 * spectrum[:, k].real, -2.0 * spectrum[:, k].imag
+
+    delta = pi / height
+    theta_c = row_centres(height)[:, None]
+    shrink = 2.0 * np.sin(k * delta / 2.0) / k
+    return (
+        a0[None, :] * delta
+        + (np.cos(k * theta_c) * shrink) @ a.T
+        + (np.sin(k * theta_c) * shrink) @ b.T
+    )
+
+
+def column_weights(width, max_order=2):
+    """c[j, m], s[j, m]: ∫ cos mφ dφ and ∫ sin mφ dφ over column j, for m = 0..max_order."""
+    m = np.arange(max_order + 1)
+    half = pi / width
+    shrink = np.where(m == 0, 2.0 * half, 2.0 * np.sin(m * half) / np.maximum(m, 1))
+    phi = column_centres(width)[:, None] * m[None, :]
+    return np.cos(phi) * shrink, np.sin(phi) * shrink
+
+
+def _accumulate_rows(pixels, weights, nonfinite):
+    """B[t, j, c] = Σ_i w[i, t] pixels[i, j, c], summed in float64 over row blocks."""
+    height, width, _ = pixels.shape
+    channels = pixels.shape[2]
+    rows = max(1, BLOCK_BYTES // (8 * width * channels))
+    total = np.zeros((weights.shape[1], width * channels))
+    block = np.empty((rows, width, channels))
+    for r0 in range(0, height, rows):
+        r1 = min(height, r0 + rows)
+        b = block[: r1 - r0]
+        b[...] = pixels[r0:r1]
+        if nonfinite == "zero":
+            b[~np.isfinite(b)] = 0.0
+        total += weights[r0:r1].T @ b.reshape(r1 - r0, -1)
+    return total.reshape(weights.shape[1], width, channels)[..., :3]
+
+
+def project_equirect(pixels, max_order=2, nonfinite="raise"):
+    """L_lm (eq. 10) of an equirectangular map, shape ((max_order+1)², 3), float64, Blender axes.
+
+    ``pixels``: (H, W, 3 or 4) float radiance in Blender's equirectangular convention, rows top
+    to bottom (see ``equirect``). Alpha is ignored; negative texels are kept (they are data).
+    Exact for the piecewise-constant image. ``nonfinite``: "raise" (default) raises a
+    ValueError saying how many NaN/Inf texels there are and where; "zero" treats them as 0.
+    """
+    a = check_pixels(pixels)
+    if nonfinite not in ("raise", "zero"):
+        raise ValueError(f'nonfinite must be "raise" or "zero", got {nonfinite!r}')
+    height, width, _ = a.shape
+    pairs = _theta_functions(max_order)
+    rows_b = _accumulate_rows(a, row_weights(height, max_order), "keep")
+    if not np.isfinite(rows_b).all():
+        if nonfinite == "raise":
+            _, message = describe_nonfinite(a)
+            raise ValueError(
+                f"pixels contain {message}: repair the image, or pass nonfinite='zero' "
+                "to treat those texels as black"
+            )
+        rows_b = _accumulate_rows(a, row_weights(height, max_order), "zero")
+    cos_w, sin_w = column_weights(width, max_order)
+    coeffs = np.zeros((num_coefficients(max_order), 3))
+    for t, (l, m) in enumerate(pairs):
+        coeffs[sh_index(l, m)] = cos_w[:, m] @ rows_b[t]
+        if m > 0:
+            coeffs[sh_index(l, -m)] = sin_w[:, m] @ rows_b[t]
+    return coeffs
