@@ -3,20 +3,31 @@ PYTHON ?= python3.11
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+LTS_VENV  := .venv-lts
+LTS_STAMP := $(LTS_VENV)/.installed
 HDRI ?=
 
-.PHONY: demo test bench package clean
+.PHONY: demo test test-lts bench package clean
 
 $(STAMP): requirements.txt
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements.txt
 	touch $(STAMP)
 
+$(LTS_STAMP): requirements-lts.txt
+	$(PYTHON) -m venv $(LTS_VENV)
+	$(LTS_VENV)/bin/python -m pip install --quiet --disable-pip-version-check -r requirements-lts.txt
+	touch $(LTS_STAMP)
+
 demo: $(STAMP)
 	$(PY) -m tools.demo $(HDRI)
 
 test: $(STAMP)
 	$(PY) -m pytest
+
+# The same suite on Blender 4.2 LTS (the oldest version the manifest promises).
+test-lts: $(LTS_STAMP)
+	$(LTS_VENV)/bin/python -m pytest
 
 bench: $(STAMP)
 	$(PY) -m benchmarks.bench_prefilter
