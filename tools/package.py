@@ -2,7 +2,7 @@
 
 The repository keeps ``blender_manifest.toml`` at the top level beside the ``sh_lighting``
 package; Blender wants the manifest next to ``__init__.py``. This stages both into
-``build/extension``, runs ``blender_ext.py validate`` and ``build`` on it, and prints the zip.
+a temporary folder, runs ``blender_ext.py validate`` and ``build`` on it, and prints the zip.
 
 Usage: python -m tools.package [OUTPUT_DIR]   (default: dist)
 """
@@ -10,12 +10,12 @@ Usage: python -m tools.package [OUTPUT_DIR]   (default: dist)
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import bpy
 
 ROOT = Path(__file__).resolve().parent.parent
-STAGE = ROOT / "build" / "extension"
 
 
 def blender_ext_command():
@@ -25,10 +25,8 @@ def blender_ext_command():
     return [sys.executable, str(tool)], tags
 
 
-def stage(destination=STAGE):
-    """Copy the package, manifest and licence into ``destination`` (emptied first)."""
-    if destination.exists():
-        shutil.rmtree(destination)
+def stage(destination):
+    """Copy the package, manifest and licence into the new folder ``destination``."""
     shutil.copytree(
         ROOT / "sh_lighting", destination, ignore=shutil.ignore_patterns("__pycache__", "*.pyc")
     )
@@ -41,17 +39,16 @@ def build(output_dir):
     """Validate and build the extension; returns the path of the zip."""
     output_dir = Path(output_dir).resolve()
     output_dir.mkdir(parents=True, exist_ok=True)
-    source = stage()
     command, tags = blender_ext_command()
-    subprocess.run(
-        command + ["validate", str(source), "--valid-tags", str(tags)], check=True
-    )
-    subprocess.run(
-        command
-        + ["build", "--source-dir", str(source), "--output-dir", str(output_dir),
-           "--valid-tags", str(tags)],
-        check=True,
-    )
+    with tempfile.TemporaryDirectory() as tmp:
+        source = stage(Path(tmp) / "sh_lighting")
+        subprocess.run(command + ["validate", str(source), "--valid-tags", str(tags)], check=True)
+        subprocess.run(
+            command
+            + ["build", "--source-dir", str(source), "--output-dir", str(output_dir),
+               "--valid-tags", str(tags)],
+            check=True,
+        )
     zips = sorted(output_dir.glob("sh_lighting-*.zip"), key=lambda p: p.stat().st_mtime)
     return zips[-1]
 

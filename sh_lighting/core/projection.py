@@ -12,12 +12,14 @@ so the integral over texel (i, j) is a row weight times a column weight:
   from l + 2 ... samples by an FFT and integrated in closed form;
 * column weight ∫ cos mφ dφ = (2 sin(m h) / m) cos(m φ_j) with h = π/W (sin likewise).
 
-The sum over texels is done as one GEMM per block of rows (rows against the row weights,
-accumulated in float64 whatever the input dtype), then a small product with the column
-weights. A constant map therefore gives exactly L00 = 2√π c and zeros elsewhere (to
+The sum over texels is done as small matrix products over blocks of rows (the rows against
+the row weights, accumulated in float64 whatever the input dtype), then a small product with
+the column weights. A constant map therefore gives exactly L00 = 2√π c and zeros elsewhere (to
 rounding), and replicating texels does not change the result.
 """
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from math import pi
 
 import numpy as np
@@ -25,8 +27,11 @@ import numpy as np
 from .equirect import check_pixels, column_centres, describe_nonfinite, row_centres
 from .sh import legendre_q, normalisation, num_coefficients, sh_index
 
-# Float64 rows per block are chosen so one block stays near this many bytes (cache-sized).
-BLOCK_BYTES = 4 << 20
+# Rows cast to float64 at a time, and floats per matrix product: small enough that each
+# product stays in cache and runs on one BLAS thread, so that WORKERS threads can share rows.
+ROWS_PER_BLOCK = 32
+COLUMN_CHUNK = 1024
+WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
 def _theta_functions(max_order):
@@ -73,21 +78,40 @@ def column_weights(width, max_order=2):
     return np.cos(phi) * shrink, np.sin(phi) * shrink
 
 
-def _accumulate_rows(pixels, weights, nonfinite):
-    """B[t, j, c] = Σ_i w[i, t] pixels[i, j, c], summed in float64 over row blocks."""
-    height, width, _ = pixels.shape
-    channels = pixels.shape[2]
-    rows = max(1, BLOCK_BYTES // (8 * width * channels))
+def _accumulate_band(pixels, weights, r0, r1, zero_nonfinite):
+    """Σ_i w[i, t] pixels[i, j, c] over rows r0..r1 as a (T, W·C) float64 array."""
+    height, width, channels = pixels.shape
     total = np.zeros((weights.shape[1], width * channels))
-    block = np.empty((rows, width, channels))
-    for r0 in range(0, height, rows):
-        r1 = min(height, r0 + rows)
-        b = block[: r1 - r0]
-        b[...] = pixels[r0:r1]
-        if nonfinite == "zero":
-            b[~np.isfinite(b)] = 0.0
-        total += weights[r0:r1].T @ b.reshape(r1 - r0, -1)
-    return total.reshape(weights.shape[1], width, channels)[..., :3]
+    block = np.empty((ROWS_PER_BLOCK, width * channels))
+    for b0 in range(r0, r1, ROWS_PER_BLOCK):
+        b1 = min(r1, b0 + ROWS_PER_BLOCK)
+        x = block[: b1 - b0]
+        x.reshape(b1 - b0, width, channels)[...] = pixels[b0:b1]  # cast, any input strides
+        if zero_nonfinite:
+            x[~np.isfinite(x)] = 0.0
+        w = weights[b0:b1].T
+        for c0 in range(0, width * channels, COLUMN_CHUNK):
+            total[:, c0 : c0 + COLUMN_CHUNK] += w @ x[:, c0 : c0 + COLUMN_CHUNK]
+    return total
+
+
+def _accumulate_rows(pixels, weights, zero_nonfinite):
+    """B[t, j, c] = Σ_i w[i, t] pixels[i, j, c] in float64, rows split between WORKERS threads.
+
+    numpy releases the GIL while casting and multiplying, so the threads run in parallel; the
+    partial sums are added in a fixed order, so the result does not depend on timing.
+    """
+    height, width, channels = pixels.shape
+    edges = np.linspace(0, height, min(WORKERS, height) + 1).astype(int)
+    bands = list(zip(edges[:-1], edges[1:]))
+    if len(bands) == 1:
+        parts = [_accumulate_band(pixels, weights, 0, height, zero_nonfinite)]
+    else:
+        with ThreadPoolExecutor(len(bands)) as pool:
+            parts = list(
+                pool.map(lambda b: _accumulate_band(pixels, weights, *b, zero_nonfinite), bands)
+            )
+    return sum(parts[1:], parts[0]).reshape(-1, width, channels)[..., :3]
 
 
 def project_equirect(pixels, max_order=2, nonfinite="raise"):
@@ -103,7 +127,8 @@ def project_equirect(pixels, max_order=2, nonfinite="raise"):
         raise ValueError(f'nonfinite must be "raise" or "zero", got {nonfinite!r}')
     height, width, _ = a.shape
     pairs = _theta_functions(max_order)
-    rows_b = _accumulate_rows(a, row_weights(height, max_order), "keep")
+    weights = row_weights(height, max_order)
+    rows_b = _accumulate_rows(a, weights, zero_nonfinite=False)
     if not np.isfinite(rows_b).all():
         if nonfinite == "raise":
             _, message = describe_nonfinite(a)
@@ -111,7 +136,7 @@ def project_equirect(pixels, max_order=2, nonfinite="raise"):
                 f"pixels contain {message}: repair the image, or pass nonfinite='zero' "
                 "to treat those texels as black"
             )
-        rows_b = _accumulate_rows(a, row_weights(height, max_order), "zero")
+        rows_b = _accumulate_rows(a, weights, zero_nonfinite=True)
     cos_w, sin_w = column_weights(width, max_order)
     coeffs = np.zeros((num_coefficients(max_order), 3))
     for t, (l, m) in enumerate(pairs):
