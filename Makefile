@@ -29,7 +29,12 @@ test: $(STAMP)
 test-lts: $(LTS_STAMP)
 	$(LTS_VENV)/bin/python -m pytest
 
-bench: $(STAMP)
+BENCH_STAMP := $(VENV)/.installed-bench
+$(BENCH_STAMP): $(STAMP) requirements-bench.txt
+	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements-bench.txt
+	touch $(BENCH_STAMP)
+
+bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_prefilter
 
 package: $(STAMP)
