@@ -1,5 +1,7 @@
 """The few places where Blender 4.2 LTS and 5.0 differ, in one module (REFERENCE.md §3b)."""
 
+import math
+
 import bpy
 
 BLENDER_VERSION = bpy.app.version
@@ -18,3 +20,27 @@ def ensure_node_tree(datablock):
     if datablock.node_tree is None:
         datablock.use_nodes = True
     return datablock.node_tree
+
+
+def set_equirectangular_panorama(camera_data):
+    """Make ``camera_data`` a full-sphere equirectangular panoramic camera.
+
+    The panorama settings live on the Camera itself in recent versions (checked on 5.0) and
+    on its Cycles settings (``camera.cycles``) in older ones; whichever holds them is used.
+    """
+    camera_data.type = "PANO"
+    holder = camera_data if hasattr(camera_data, "panorama_type") else camera_data.cycles
+    holder.panorama_type = "EQUIRECTANGULAR"
+    holder.latitude_min, holder.latitude_max = -0.5 * math.pi, 0.5 * math.pi
+    holder.longitude_min, holder.longitude_max = -math.pi, math.pi
+
+
+def uses_nodes(datablock):
+    """True when a material or world renders from its node tree.
+
+    Before 5.0 a tree can exist with ``use_nodes`` off (then Blender ignores it); in 5.0
+    ``use_nodes`` is deprecated and a present tree is always used.
+    """
+    if datablock.node_tree is None:
+        return False
+    return BLENDER_VERSION >= (5, 0, 0) or bool(datablock.use_nodes)
