@@ -132,3 +132,13 @@ def test_memory_stays_bounded_on_a_16k_map():
     assert peak < 1 << 30, f"peak extra memory {peak / 2**20:.0f} MiB"
     assert coeffs[0] == pytest.approx(2.0 * sqrt(pi) * 0.5, rel=1e-12)
     assert np.abs(coeffs[1:]).max() < ROUNDING
+
+
+@pytest.mark.parametrize("height", [1, 2, 3, 17, 256, 4096])
+@pytest.mark.parametrize("order", [2, 4, 6])
+def test_row_weights_equal_the_closed_form_antiderivative(height, order):
+    """Gauss-Legendre rows against the exact Fourier antiderivative (accurate away from poles)."""
+    from sh_lighting.core.projection import row_weights, row_weights_closed_form
+
+    fast, exact = row_weights(height, order), row_weights_closed_form(height, order)
+    assert np.abs(fast - exact).max() < 1e-14 * np.abs(exact).max()
