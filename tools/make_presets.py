@@ -1,0 +1,121 @@
+"""Write the bundled lighting presets under presets/.
+
+Usage: python -m tools.make_presets [--no-hdri]
+
+* The paper's Figure 2 probes (grace_cathedral, eucalyptus_grove, st_peters_basilica), read
+  from ../shared/data/figure2_coefficients.json and converted from the paper's y-up frame to
+  Blender's by an exact SH rotation (``frames.paper_to_blender``). Needs numpy only.
+* The 8 HDRIs that ship with Blender (studiolights/world: city, courtyard, forest, interior,
+  night, studio, sunrise, sunset), projected exactly with ``project_equirect``, each with its
+  9-term error estimate against the exact irradiance (``reference_irradiance``) at 512 normals.
+  Needs the ``bpy`` module; skipped with ``--no-hdri``.
+
+Existing preset files are replaced. The files carry no creation date, so regenerating them
+gives the same bytes when the inputs have not changed.
+"""
+
+import json
+import sys
+from math import pi, sqrt
+from pathlib import Path
+
+import numpy as np
+
+from sh_lighting.core.frames import paper_to_blender
+from sh_lighting.core.presets import write_preset
+
+ROOT = Path(__file__).resolve().parent.parent
+PRESETS = ROOT / "presets"
+FIGURE2 = ROOT.parent / "shared" / "data" / "figure2_coefficients.json"
+FIGURE2_NAMES = {
+    "grace_cathedral": "Grace Cathedral",
+    "eucalyptus_grove": "Eucalyptus Grove",
+    "st_peters_basilica": "St. Peter's Basilica",
+}
+HDRI_NAMES = ("city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset")
+ERROR_NORMALS = 512
+
+
+def figure2_presets(path=FIGURE2):
+    """{file stem: (coefficients in Blender axes, metadata)} for the paper's three probes."""
+    data = json.loads(Path(path).read_text(encoding="utf-8"))
+    out = {}
+    for stem, rows in data["probes"].items():
+        out[stem] = (
+            paper_to_blender(np.array(rows, dtype=np.float64)),
+            {
+                "name": FIGURE2_NAMES.get(stem, stem.replace("_", " ").title()),
+                "source": "Ramamoorthi & Hanrahan 2001, Figure 2",
+                "notes": (
+                    "Converted from the paper's y-up probe frame to Blender's z-up world axes, "
+                    "(x, y, z)_blender = (x, -z, y)_paper, by an exact SH rotation; the paper "
+                    "prints two decimals."
+                ),
+            },
+        )
+    return out
+
+
+def spread_normals(count=ERROR_NORMALS):
+    """``count`` near-uniform unit vectors (a Fibonacci lattice), fixed for reproducibility."""
+    k = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * k / count
+    phi = pi * (1.0 + 5.0**0.5) * k
+    r = np.sqrt(1.0 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+
+
+def error_estimate(pixels, coeffs, normals):
+    """9-term irradiance error / total power ∫L dω: worst channel's mean, and the max."""
+    from sh_lighting.core import irradiance, reference_irradiance
+
+    power = coeffs[0] * 2.0 * sqrt(pi)  # ∫ L dω per channel
+    err = np.abs(irradiance(coeffs, normals) - reference_irradiance(pixels, normals)) / power
+    return {"mean": float(err.mean(axis=0).max()), "max": float(err.max())}
+
+
+def hdri_presets():
+    """{file stem: (coefficients, metadata)} for the 8 HDRIs that ship inside bpy."""
+    import bpy
+
+    from sh_lighting.blender.images import load_image_pixels
+    from sh_lighting.core import project_equirect
+
+    folder = Path(bpy.utils.system_resource("DATAFILES", path="studiolights/world"))
+    normals = spread_normals()
+    out = {}
+    for name in HDRI_NAMES:
+        pixels = load_image_pixels(folder / f"{name}.exr")
+        coeffs = project_equirect(pixels)
+        out[name] = (
+            coeffs,
+            {
+                "name": name.title(),
+                "source": f"Blender datafiles: studiolights/world/{name}.exr",
+                "mapping": [0.0, 0.0, 0.0],
+                "strength": 1.0,
+                "error_estimate": error_estimate(pixels, coeffs, normals),
+                "notes": (
+                    f"Projected exactly from the {pixels.shape[1]}x{pixels.shape[0]} EXR "
+                    f"bundled with Blender {bpy.app.version_string}; error estimate at "
+                    f"{len(normals)} normals against the exact irradiance."
+                ),
+            },
+        )
+        print(f"  {name:10s} error mean {100 * out[name][1]['error_estimate']['mean']:.3f} %, "
+              f"max {100 * out[name][1]['error_estimate']['max']:.3f} % of total power")
+    return out
+
+
+def main(argv):
+    presets = figure2_presets()
+    if "--no-hdri" not in argv:
+        presets.update(hdri_presets())
+    PRESETS.mkdir(exist_ok=True)
+    for stem, (coeffs, metadata) in presets.items():
+        path = write_preset(PRESETS / f"{stem}.json", coeffs, metadata, overwrite=True)
+        print(f"wrote {path.relative_to(ROOT)}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
