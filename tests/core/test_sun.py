@@ -1,0 +1,181 @@
+"""Sun detection and the sun + SH split (sun.py), on synthetic equirect maps."""
+
+from dataclasses import FrozenInstanceError
+from math import pi
+
+import numpy as np
+import pytest
+from quadrature import random_directions
+
+from sh_lighting.core.equirect import texel_directions, texel_solid_angles
+from sh_lighting.core.projection import project_equirect
+from sh_lighting.core.sh import sh_basis
+from sh_lighting.core.sun import (
+    Sun,
+    detect_sun,
+    eevee_style_split,
+    remove_sun,
+    sun_irradiance,
+    sun_split_error,
+)
+
+H, W = 128, 256  # texels of 1.4°
+SKY = np.array([0.8, 0.9, 1.2])
+GROUND = np.array([0.3, 0.25, 0.2])
+SUN_RGB = np.array([1.0, 0.9, 0.7])
+EXACT = 1e-12
+
+
+def unit(v):
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v)
+
+
+def sky_with_disc(direction, radius_deg=2.5, radiance=3000.0, height=H, width=W):
+    """A constant sky over a constant ground, plus a disc added to the texels whose centre is
+    within ``radius_deg`` of ``direction``. Returns (pixels, disc mask)."""
+    dirs = texel_directions(height, width)
+    pixels = np.where(dirs[..., 2:] > 0.0, SKY, GROUND)
+    disc = dirs @ unit(direction) > np.cos(np.radians(radius_deg))
+    pixels = pixels + disc[..., None] * radiance * SUN_RGB
+    return pixels, disc
+
+
+def disc_irradiance(disc, radiance=3000.0, height=H, width=W):
+    """Σ_disc (L − sky) dΩ per channel: what the sun must carry."""
+    solid = np.broadcast_to(texel_solid_angles(height, width)[:, None], disc.shape)
+    return radiance * SUN_RGB * solid[disc].sum()
+
+
+def test_sun_in_the_sky_is_found_exactly():
+    s = unit([0.5, -0.6, 0.55])
+    pixels, disc = sky_with_disc(s)
+    sun = detect_sun(pixels)
+    assert isinstance(sun, Sun)
+    assert np.array_equal(sun.mask, disc)
+    assert np.abs(sun.background - SKY).max() < EXACT  # the ring around the disc is all sky
+    expected = disc_irradiance(disc)
+    assert np.abs(sun.irradiance - expected).max() < EXACT * expected.max()
+    assert sun.strength == pytest.approx(expected.max(), rel=EXACT)
+    assert np.abs(sun.colour - SUN_RGB).max() < EXACT  # its max is already 1
+    assert np.abs(sun.strength * sun.colour - sun.irradiance).max() < EXACT * sun.strength
+    # direction: within the disc, close to its centre (texels are 1.4°: quantisation only)
+    assert np.degrees(np.arccos(sun.direction @ s)) < 0.5
+    assert np.linalg.norm(sun.direction) == pytest.approx(1.0, abs=1e-15)
+    # diameter of the disc with the region's solid angle: about 5° (up to the texel staircase)
+    assert np.degrees(sun.angular_diameter) == pytest.approx(5.0, abs=0.3)
+    total = (pixels @ [0.2126, 0.7152, 0.0722] * texel_solid_angles(H, W)[:, None]).sum()
+    assert sun.power_fraction == pytest.approx(expected @ [0.2126, 0.7152, 0.0722] / total)
+    with pytest.raises(FrozenInstanceError):
+        sun.strength = 1.0
+
+
+def test_remove_sun_restores_the_sky_and_conserves_power():
+    pixels, disc = sky_with_disc([0.5, -0.6, 0.55])
+    rgba = np.concatenate([pixels, np.full((H, W, 1), 0.5)], axis=-1).astype(np.float32)
+    sun = detect_sun(rgba)
+    rest = remove_sun(rgba, sun)
+    clean, _ = sky_with_disc([0.5, -0.6, 0.55], radiance=0.0)
+    assert rest.dtype == np.float32 and np.all(rest[..., 3] == 0.5)
+    assert np.array_equal(rest[..., :3], clean.astype(np.float32))
+    # sun + rest carry exactly the map's power: L00 / Y00 = ∫ L dω
+    l00 = project_equirect(rgba)[0] - project_equirect(rest)[0]
+    assert np.abs(l00 / sh_basis(np.array([0, 0, 1.0]))[0] - sun.irradiance).max() < 1e-4
+    assert np.all(rgba == remove_sun(rgba, sun) + (rgba - rest))  # input left untouched
+
+
+@pytest.mark.parametrize(
+    "direction",
+    [[0.03, 0.02, 1.0], [-1.0, 0.0, 0.3], [1.0, -1.0, -0.2]],
+    ids=["across the pole", "across the u = 0 seam", "below the horizon"],
+)
+def test_connectivity_wraps_around(direction):
+    pixels, disc = sky_with_disc(direction, radius_deg=3.0)
+    sun = detect_sun(pixels)
+    assert sun is not None and np.array_equal(sun.mask, disc)
+    background = SKY if direction[2] > 0.1 else GROUND
+    expected = disc_irradiance(disc)
+    if direction[2] < 0:  # under the horizon the ring is ground, which the disc sits on
+        assert np.abs(sun.background - background).max() < EXACT
+    assert np.abs(sun.irradiance - expected).max() < 1e-9 * expected.max()
+    assert np.degrees(np.arccos(sun.direction @ unit(direction))) < 0.5
+
+
+def test_split_beats_plain_sh():
+    pixels, _ = sky_with_disc([0.5, -0.6, 0.55])
+    normals = random_directions(120, seed=2)
+    errors = sun_split_error(pixels, normals)
+    assert errors.sun is not None
+    # the 9 terms ring around the strong disc; sun + SH9 is left with only the horizon step
+    assert errors.sun_mean < errors.plain_mean / 5 and errors.sun_max < errors.plain_max / 5
+    assert errors.plain_mean > 0.01 and errors.sun_mean < 0.005
+    # the EEVEE-style split keeps only l ≤ 1 for the rest: between the two here
+    assert errors.sun_mean < errors.eevee_mean
+
+
+def test_no_sun_in_a_smooth_map():
+    rng = np.random.default_rng(7)
+    field = sh_basis(texel_directions(H, W), 3) @ rng.normal(size=16)
+    pixels = np.exp(field)[..., None] * [1.0, 0.9, 0.8]  # smooth, positive, contrast < 100
+    assert pixels.max() / np.median(pixels) < 100
+    assert detect_sun(pixels) is None
+    errors = sun_split_error(pixels, random_directions(40, seed=1))
+    assert errors.sun is None
+    assert (errors.sun_mean, errors.sun_max) == (errors.plain_mean, errors.plain_max)
+
+
+def test_no_sun_when_the_bright_area_is_large():
+    pixels, _ = sky_with_disc([0.3, 0.8, 0.5], radius_deg=12.0, radiance=300.0)
+    assert detect_sun(pixels) is None  # a window, not a sun: wider than MAX_RADIUS
+    assert detect_sun(pixels, max_radius=np.radians(15.0)) is not None
+
+
+def test_no_sun_when_the_source_is_weak():
+    pixels, disc = sky_with_disc([0.3, 0.8, 0.5], radius_deg=1.2, radiance=110.0)
+    share = disc_irradiance(disc, 110.0) @ [0.2126, 0.7152, 0.0722] / (
+        pixels @ [0.2126, 0.7152, 0.0722] * texel_solid_angles(H, W)[:, None]
+    ).sum()
+    assert 0.002 < share < 0.02
+    assert detect_sun(pixels) is None
+    sun = detect_sun(pixels, min_power_fraction=0.001)
+    assert sun is not None and sun.power_fraction == pytest.approx(share)
+
+
+def test_sun_as_a_directional_light():
+    pixels, _ = sky_with_disc([0.0, 0.0, 1.0], radius_deg=1.0)
+    sun = detect_sun(pixels)
+    n = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 0.6, -0.8], [0.6, 0.0, 0.8]])
+    e = sun_irradiance(sun, n)
+    assert np.abs(e[0] - sun.irradiance).max() < EXACT
+    assert np.all(e[1:3] == 0.0)
+    assert np.abs(e[3] - 0.8 * sun.irradiance).max() < 1e-3 * sun.strength
+
+
+def test_eevee_style_split_clamps_and_conserves_power():
+    s = unit([0.5, -0.6, 0.55])
+    pixels, disc = sky_with_disc(s)
+    rgb, direction, coeffs = eevee_style_split(pixels, threshold=10.0)
+    assert coeffs.shape == (4, 3)
+    # the sun takes what lies above 10 in each disc texel's largest channel, hue kept:
+    # L (1 − 10 / max L)
+    solid = texel_solid_angles(H, W)[:, None]
+    inside = pixels[disc]
+    expected = (inside * (1.0 - 10.0 / inside.max(axis=-1, keepdims=True))
+                * np.broadcast_to(solid, disc.shape)[disc][:, None]).sum(axis=0)
+    assert np.abs(rgb - expected).max() < EXACT * expected.max()
+    assert np.degrees(np.arccos(direction @ s)) < 0.5
+    # sun + clamped map = the map's power
+    y00 = sh_basis(np.array([0.0, 0.0, 1.0]))[0]
+    total = project_equirect(pixels)[0] / y00
+    assert np.abs(coeffs[0] / y00 + rgb - total).max() < 1e-9 * total.max()
+    # nothing above the threshold: no sun, plain order-1 SH
+    rgb, direction, coeffs = eevee_style_split(pixels, threshold=1e6)
+    assert direction is None and np.all(rgb == 0.0)
+    assert np.abs(coeffs - project_equirect(pixels, max_order=1)).max() < EXACT
+
+
+def test_total_power_of_the_synthetic_sky():
+    """Guards the helpers above: sky and ground halves have power 2π × their radiance."""
+    pixels, _ = sky_with_disc([0, 0, 1], radiance=0.0)
+    power = project_equirect(pixels)[0] / sh_basis(np.array([0.0, 0.0, 1.0]))[0]
+    assert np.abs(power - 2 * pi * (SKY + GROUND)).max() < 1e-9
