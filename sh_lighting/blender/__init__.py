@@ -4,9 +4,9 @@ Each module exports ``register()``/``unregister()``; they are called in ``MODULE
 and undone in reverse.
 """
 
-from . import preferences
+from . import operators, panels, preferences, properties
 
-MODULES = (preferences,)
+MODULES = (preferences, properties, operators, panels)
 
 
 def register():

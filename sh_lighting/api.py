@@ -1,0 +1,101 @@
+"""Public scripting API of SH Lighting; works in background mode without any UI context.
+
+Example::
+
+    import bpy
+    from sh_lighting import api   # bl_ext.user_default.sh_lighting.api when installed
+
+    scene = bpy.context.scene
+    coeffs = api.compute_from_world(scene)        # (9, 3) L_lm, stored on the scene too
+    coeffs[2] *= 2.0                              # twice the light from above vs below
+    api.set_coefficients(scene, coeffs)
+    api.apply_to_materials(bpy.data.materials, scene)
+
+Coefficients are raw radiance L_lm (Ramamoorthi and Hanrahan 2001, eq. 10), in the order of
+``sh_lighting.core.sh.COEFFICIENT_NAMES`` (L00, L1-1, L10, L11, L2-2, ...), RGB per row, in
+Blender world axes. Errors are raised with the same messages the operators report.
+"""
+
+import bpy
+
+from .blender import materials as _materials
+from .blender import nodes as _nodes
+from .blender import properties as _properties
+from .blender import scene_data as _scene_data
+from .blender import world as _world
+from .blender.preferences import ADDON_ID as _ADDON_ID
+
+WorldError = _world.WorldError
+
+
+def _default_capture_width(scene):
+    settings = getattr(scene, "sh_lighting", None)
+    addon = bpy.context.preferences.addons.get(_ADDON_ID)
+    return _properties.capture_width_for(
+        settings, addon.preferences if addon is not None else None
+    )
+
+
+def compute_from_world(scene, capture_width=None):
+    """Project ``scene``'s world onto 9 SH coefficients and store them on the scene.
+
+    Reads the Environment Texture image directly when the world is one, else renders a
+    ``capture_width`` × ``capture_width/2`` equirectangular capture (default: the scene's
+    override, else the add-on preferences, else 256). The result also becomes the Reset
+    values. Returns the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
+    user-facing message, leaving the scene unchanged, when the world cannot be read.
+    """
+    if capture_width is None:
+        capture_width = _default_capture_width(scene)
+    coeffs, _info = _world.world_coefficients(scene, capture_width=int(capture_width))
+    return _properties.store_coefficients(scene, coeffs, computed=True)
+
+
+def get_coefficients(scene):
+    """The scene's (9, 3) float64 L_lm; a LookupError if they were never set."""
+    return _scene_data.get_coefficients(scene)
+
+
+def get_computed(scene):
+    """The (9, 3) values last computed from the world (what Reset restores), or None."""
+    return _scene_data.get_computed(scene)
+
+
+def set_coefficients(scene, coeffs):
+    """Store (9, 3) L_lm on ``scene`` (a ValueError, nothing changed, if not finite 9×3).
+
+    Materials that SH Lighting was applied to follow at the next render: they read the
+    values at render time. Returns the stored float64 copy.
+    """
+    return _properties.store_coefficients(scene, coeffs)
+
+
+def reset(scene):
+    """Set the coefficients back to the values last computed from the world.
+
+    A LookupError if nothing was computed yet. Returns the restored (9, 3) array.
+    """
+    computed = _scene_data.get_computed(scene)
+    if computed is None:
+        raise LookupError("Nothing to reset to: run Compute from World first")
+    return _properties.store_coefficients(scene, computed)
+
+
+def ensure_node_group(scene):
+    """The "SH Irradiance" shader node group reading ``scene``'s coefficients, created once."""
+    return _nodes.ensure_node_group(scene)
+
+
+def apply_to_materials(materials, scene=None):
+    """Add SH irradiance lighting to ``materials`` (any iterable of Material), using the
+    coefficients of ``scene`` (default: the context scene). Returns which materials were
+    changed and which were skipped, with reasons.
+    """
+    if scene is None:
+        scene = bpy.context.scene
+    return _materials.apply_to_materials(list(materials), scene)
+
+
+def remove_from_materials(materials):
+    """Undo ``apply_to_materials`` on ``materials``; returns which were changed or skipped."""
+    return _materials.remove_from_materials(list(materials))

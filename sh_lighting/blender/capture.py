@@ -1,0 +1,236 @@
+"""Render a world as Cycles sees it into an equirectangular float image, leaving no trace.
+
+Used for worlds whose node trees the add-on cannot read directly (Sky Texture, gradients,
+mixes, unsupported mapping...): whatever the nodes do, the panorama is the radiance arriving
+at the origin from every direction, laid out in Blender's own equirectangular convention
+(REFERENCE.md §3: u = 0.5 − atan2(y, x)/2π, image centre facing +X, v from the bottom), so
+``sh_lighting.core.project_equirect`` takes it directly (rows are returned top to bottom).
+
+How, without touching the user's scene:
+
+* a temporary copy of the world (``World.copy()``: its node tree is copied, its images and
+  animation are shared) in a temporary scene (``bpy.data.scenes.new``), with a temporary
+  panoramic equirectangular camera at the origin, rotated (90°, 0°, −90°) so that the image
+  centre looks along +X with +Z up (checked against an Environment Texture, texel for texel).
+  The copy is made visible to camera rays and its Cycles importance map (multiple importance
+  sampling, useless without objects, and measured at ~2.5 s for an image world) is switched
+  off; the user's world itself is never written to;
+* Cycles on the CPU, box pixel filter of one pixel (each pixel is the average of the world over
+  its texel), no denoising, no dithering, no clamping, Standard view transform, exposure 0;
+* the still is written as a 32-bit float OpenEXR in a ``tempfile`` directory (headless bpy
+  cannot read the 'Render Result' pixels), read back, and everything temporary is removed:
+  files, image, camera, object, world copy, scene. A 'Render Result' image that did not exist
+  before is removed too.
+
+A sun much smaller than a pixel (a Sky Texture's is 0.545° wide and carries ~85% of its light)
+is hit by too few of a pixel's samples: its light came out anywhere from 0% to +35% wrong at
+256 × 128 × 16 samples. So the block of pixels around such "hot" pixels is rendered again up to
+16 times finer (a border render, the camera turned by whole columns so that the block does not
+cross the seam) and averaged back by solid angle (``core.supersample``): the Sky Texture's L00
+then agrees with a 40-second converged render to 0.3% at the default width. What remains is
+the capture's resolution: a point-like light is counted at its texel's centre.
+
+What the capture sees is what *camera* rays see: a world using a Light Path node to show the
+camera something else than it lights the scene with is captured as the camera sees it.
+"""
+
+import math
+import os
+import shutil
+import tempfile
+
+import bpy
+import numpy as np
+
+from ..core.supersample import average_fine_rows, hot_region
+from . import compat
+from .images import load_image_pixels
+
+#: Samples per pixel: enough for the box filter to average a texel well (a constant world is
+#: exact with any count, since no objects means no noise).
+DEFAULT_SAMPLES = 16
+
+#: Refinement: at most this many times finer, and at most this many pixels rendered.
+REFINE_FACTOR = 16
+REFINE_PIXELS = 1 << 16
+
+# Camera rotation (XYZ Euler) that puts +X at the image centre and +Z up.
+CAMERA_ROTATION = (math.pi / 2.0, 0.0, -math.pi / 2.0)
+
+
+class CaptureError(RuntimeError):
+    """The world could not be rendered; the message says why and what to do."""
+
+
+def _set_cycles(scene):
+    try:
+        scene.render.engine = "CYCLES"
+    except TypeError:
+        raise CaptureError(
+            "capturing the world needs the Cycles render engine, which is not available: "
+            "enable the Cycles add-on (Preferences > Add-ons > Cycles Render Engine)"
+        ) from None
+
+
+def _configure(scene, samples, frame):
+    render = scene.render
+    render.resolution_percentage = 100
+    render.pixel_aspect_x = render.pixel_aspect_y = 1.0
+    render.use_border = False
+    render.use_motion_blur = False
+    render.film_transparent = False
+    render.dither_intensity = 0.0
+    render.use_compositing = False
+    render.use_sequencer = False
+    render.use_persistent_data = False
+    render.use_file_extension = False
+    scene.frame_current = frame
+
+    settings = render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_mode = "RGBA"
+    settings.color_depth = "32"
+    settings.exr_codec = "ZIP"
+
+    view = scene.view_settings
+    view.view_transform = "Standard"
+    view.look = "None"
+    view.exposure = 0.0
+    view.gamma = 1.0
+    view.use_curve_mapping = False
+
+    cycles = scene.cycles
+    cycles.device = "CPU"
+    cycles.samples = samples
+    cycles.use_adaptive_sampling = False
+    cycles.use_denoising = False
+    cycles.pixel_filter_type = "BOX"
+    cycles.filter_width = 1.0
+    cycles.sample_clamp_direct = 0.0
+    cycles.sample_clamp_indirect = 0.0
+    cycles.seed = 0
+    cycles.use_animated_seed = False
+    cycles.film_exposure = 1.0
+
+
+def _render(scene, path, width, height, border=None):
+    """Render ``scene`` at width × height (or the ``border`` crop of it) and read it back.
+
+    ``border``: (column0, column1, row0, row1) in pixels, rows top to bottom, ends excluded.
+    """
+    render = scene.render
+    render.resolution_x, render.resolution_y = width, height
+    render.use_border = render.use_crop_to_border = border is not None
+    if border is not None:
+        column0, column1, row0, row1 = border
+        # Blender floors border × size to pixels: aim at pixel centres of the edges.
+        render.border_min_x = (column0 + 0.5) / width
+        render.border_max_x = (column1 + 0.5) / width
+        render.border_min_y = (height - row1 + 0.5) / height
+        render.border_max_y = (height - row0 + 0.5) / height
+    if os.path.exists(path):
+        os.remove(path)
+    try:
+        result = bpy.ops.render.render(write_still=True, scene=scene.name)
+    except RuntimeError as error:
+        raise CaptureError(f"Cycles could not render the world: {error}") from None
+    if "FINISHED" not in result or not os.path.isfile(path):
+        raise CaptureError(
+            "Cycles did not render the world (is another render running?): "
+            "wait for it to finish and try again"
+        )
+    try:
+        return load_image_pixels(path)
+    except ValueError as error:
+        raise CaptureError(f"the captured world could not be read back: {error}") from None
+
+
+def _refine(scene, camera, path, coarse):
+    """Re-render the block around the capture's hot texels finer and average it back in place."""
+    height, width = coarse.shape[:2]
+    region = hot_region(coarse)
+    if region is None:
+        return
+    row0, row1, start, count = region
+    factor = min(REFINE_FACTOR, int(math.sqrt(REFINE_PIXELS / ((row1 - row0) * count))))
+    if factor < 2:
+        return
+    # Turn the camera about +Z by whole columns so that the block does not cross the seam:
+    # turned by 2πk/W, the capture's column j shows the unturned column j − k.
+    shift = -start % width
+    camera.rotation_euler[2] = CAMERA_ROTATION[2] + 2.0 * math.pi * shift / width
+    border = (0, count * factor, row0 * factor, row1 * factor)
+    fine = _render(scene, path, width * factor, height * factor, border)
+    expected = ((row1 - row0) * factor, count * factor)
+    if fine.shape[:2] != expected:
+        raise CaptureError(
+            f"the refining render has shape {fine.shape[:2]} instead of {expected}: "
+            "pass refine=False to capture without refining"
+        )
+    columns = (start + np.arange(count)) % width
+    coarse[row0:row1, columns] = average_fine_rows(fine, factor, row0, height)
+
+
+def capture_world(world, width=256, samples=DEFAULT_SAMPLES, frame=None, refine=True):
+    """Render ``world`` with Cycles: a (width/2, width, 4) float32 equirect array, rows top down.
+
+    ``frame``: the frame to evaluate an animated world at (default: the current scene's).
+    ``refine``: re-render the block around very bright, small features (a sun) up to
+    ``REFINE_FACTOR`` times finer and average it back (``core.supersample``).
+    Raises CaptureError when the world cannot be rendered. Leaves ``bpy.data`` as it found it.
+    """
+    if world is None:
+        raise CaptureError("there is no world to capture: assign a world to the scene")
+    width = int(width)
+    if width < 4 or width % 2:
+        raise CaptureError(f"capture width must be an even number of at least 4, got {width}")
+    samples = int(samples)
+    if samples < 1:
+        raise CaptureError(f"capture samples must be at least 1, got {samples}")
+    height = width // 2
+    if frame is None:
+        frame = bpy.context.scene.frame_current if bpy.context.scene else 1
+
+    had_render_result = {image.name for image in bpy.data.images if image.type == "RENDER_RESULT"}
+    directory = tempfile.mkdtemp(prefix="sh_lighting_capture_")
+    path = os.path.join(directory, "world.exr")
+    scene = camera_data = camera = copy = None
+    try:
+        copy = world.copy()
+        scene = bpy.data.scenes.new("SH Lighting Capture")
+        scene.world = copy
+        if hasattr(copy, "cycles"):
+            copy.cycles.sampling_method = "NONE"
+        visibility = getattr(copy, "cycles_visibility", None)
+        if visibility is not None and not visibility.camera:
+            # Cycles' update callback tags the *context* scene's world: make that the copy.
+            with bpy.context.temp_override(scene=scene):
+                visibility.camera = True
+        _set_cycles(scene)
+        _configure(scene, samples, frame)
+        camera_data = bpy.data.cameras.new("SH Lighting Capture")
+        compat.set_equirectangular_panorama(camera_data)
+        camera = bpy.data.objects.new("SH Lighting Capture", camera_data)
+        camera.location = (0.0, 0.0, 0.0)
+        camera.rotation_mode = "XYZ"
+        camera.rotation_euler = CAMERA_ROTATION
+        scene.collection.objects.link(camera)
+        scene.camera = camera
+        scene.render.filepath = path
+        pixels = _render(scene, path, width, height)
+        if refine:
+            _refine(scene, camera, path, pixels)
+        return pixels
+    finally:
+        if scene is not None:
+            bpy.data.scenes.remove(scene)
+        if camera is not None:
+            bpy.data.objects.remove(camera)
+        if camera_data is not None:
+            bpy.data.cameras.remove(camera_data)
+        if copy is not None:
+            bpy.data.worlds.remove(copy)
+        for image in list(bpy.data.images):
+            if image.type == "RENDER_RESULT" and image.name not in had_render_result:
+                bpy.data.images.remove(image)
+        shutil.rmtree(directory, ignore_errors=True)

@@ -1,0 +1,112 @@
+"""The "SH Lighting" panel, in World Properties and in the 3D Viewport sidebar.
+
+Both places draw with the same functions; the "Coefficients" sub-panel shows, per L_lm, what
+it does, its row value (scales the RGB triple) and the three channels, which are the scene's
+custom properties themselves (keyframable, read by materials at render time).
+"""
+
+import bpy
+
+from ..core.sh import COEFFICIENT_NAMES
+from . import properties, scene_data
+
+CHANNELS = "RGB"
+
+
+def draw_main(layout, context):
+    """Buttons and settings: Compute / Reset, capture width, Apply / Remove with their target."""
+    scene = context.scene
+    settings = scene.sh_lighting
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+
+    col = layout.column(align=True)
+    col.operator("shlight.compute_from_world", icon="WORLD")
+    col.operator("shlight.reset", icon="LOOP_BACK")
+
+    row = layout.row(heading="Capture Width")
+    row.prop(settings, "use_capture_width", text="")
+    sub = row.row()
+    sub.active = settings.use_capture_width
+    sub.prop(settings, "capture_width", text="")
+
+    layout.prop(settings, "apply_target", expand=True)
+    row = layout.row(align=True)
+    row.operator("shlight.apply", text="Apply", icon="MATERIAL")
+    row.operator("shlight.remove", text="Remove", icon="X")
+
+
+def draw_coefficients(layout, context):
+    """One block per coefficient: name and meaning, row value, R G B custom-property fields."""
+    scene = context.scene
+    if not scene_data.has_coefficients(scene):
+        col = layout.column(align=True)
+        col.label(text="No coefficients yet", icon="INFO")
+        col.label(text="Compute from World, or set them from Python")
+        return
+    settings = scene.sh_lighting
+    for index, name in enumerate(COEFFICIENT_NAMES):
+        col = layout.column(align=True)
+        col.label(text=f"{name}: {properties.COEFFICIENT_PHRASES[index]}")
+        col.prop(settings, properties.row_property_name(index), text="Row")
+        row = col.row(align=True)
+        path = f'["{scene_data.PROPERTY_NAMES[index]}"]'
+        for channel, letter in enumerate(CHANNELS):
+            row.prop(scene, path, index=channel, text=letter)
+
+
+class _SceneMixin:
+    @classmethod
+    def poll(cls, context):
+        return context.scene is not None and hasattr(context.scene, "sh_lighting")
+
+
+class SHLIGHT_PT_world(_SceneMixin, bpy.types.Panel):
+    bl_label = "SH Lighting"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "world"
+
+    def draw(self, context):
+        draw_main(self.layout, context)
+
+
+class SHLIGHT_PT_world_coefficients(_SceneMixin, bpy.types.Panel):
+    bl_label = "Coefficients"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "world"
+    bl_parent_id = "SHLIGHT_PT_world"
+
+    def draw(self, context):
+        draw_coefficients(self.layout, context)
+
+
+class SHLIGHT_PT_view3d(_SceneMixin, bpy.types.Panel):
+    bl_label = "SH Lighting"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "SH Lighting"
+
+    def draw(self, context):
+        draw_main(self.layout, context)
+
+
+class SHLIGHT_PT_view3d_coefficients(_SceneMixin, bpy.types.Panel):
+    bl_label = "Coefficients"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "SH Lighting"
+    bl_parent_id = "SHLIGHT_PT_view3d"
+
+    def draw(self, context):
+        draw_coefficients(self.layout, context)
+
+
+classes = (
+    SHLIGHT_PT_world,
+    SHLIGHT_PT_world_coefficients,
+    SHLIGHT_PT_view3d,
+    SHLIGHT_PT_view3d_coefficients,
+)
+register, unregister = bpy.utils.register_classes_factory(classes)

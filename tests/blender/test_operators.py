@@ -1,0 +1,375 @@
+"""Operators and the scripting API in background mode (no window, no UI context).
+
+Worlds are built from tiny float EXRs written to ``tmp_path``: a constant radiance c at
+strength s has the exact coefficients L00 = 2√π c s and L_lm = 0 otherwise (REFERENCE.md §2).
+"""
+
+import math
+
+import bpy
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from sh_lighting import api
+from sh_lighting.blender import compat, materials, operators, properties, scene_data, world
+from sh_lighting.blender.world import WorldError
+
+COLOUR = (0.2, 0.5, 1.5)
+STRENGTH = 2.0
+# The EXR holds float32 texels: the projection is exact up to float32 rounding.
+FLOAT32_TOL = 1e-6
+KNOWN = np.arange(27, dtype=np.float64).reshape(9, 3) / 10.0 - 1.0  # signed, some > 1
+
+
+def write_exr(path, rgb, width=16, height=8):
+    """A constant-colour 32-bit float EXR (ZIP, lossless); the scene's settings are restored."""
+    image = bpy.data.images.new("sh_test_exr", width, height, alpha=True, float_buffer=True)
+    pixels = np.empty((height, width, 4), dtype=np.float32)
+    pixels[...] = (*rgb, 1.0)
+    image.pixels.foreach_set(pixels.ravel())
+    scene = bpy.context.scene
+    settings = scene.render.image_settings
+    saved = settings.file_format, settings.color_depth, settings.exr_codec
+    settings.file_format, settings.color_depth, settings.exr_codec = "OPEN_EXR", "32", "ZIP"
+    image.save_render(str(path), scene=scene)
+    settings.file_format, settings.color_depth, settings.exr_codec = saved
+    bpy.data.images.remove(image)
+    return path
+
+
+def image_world(scene, path, strength=STRENGTH, name="SH Test World"):
+    """Environment Texture (image at ``path``, or none) -> Background -> World Output."""
+    world = bpy.data.worlds.new(name)
+    tree = world.node_tree
+    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    background.inputs["Strength"].default_value = strength
+    env = tree.nodes.new("ShaderNodeTexEnvironment")
+    if path is not None:
+        env.image = bpy.data.images.load(str(path))
+    tree.links.new(env.outputs["Color"], background.inputs["Color"])
+    scene.world = world
+    return world
+
+
+def expected_constant(rgb=COLOUR, strength=STRENGTH):
+    expected = np.zeros((9, 3))
+    expected[0] = 2.0 * math.sqrt(math.pi) * np.asarray(rgb) * strength
+    return expected
+
+
+class Recorder:
+    """Stands in for the operator instance when calling ``execute`` directly: keeps reports."""
+
+    def __init__(self):
+        self.reports = []
+
+    def report(self, kind, message):
+        self.reports.append((set(kind), message))
+
+
+def run_execute(cls):
+    recorder = Recorder()
+    return cls.execute(recorder, bpy.context), recorder.reports
+
+
+# --- Compute from World ---------------------------------------------------------------------
+
+
+def test_compute_operator_on_constant_exr_world_and_undo(addon, tmp_path):
+    image_world(bpy.context.scene, write_exr(tmp_path / "constant.exr", COLOUR))
+    bpy.ops.ed.undo_push(message="before compute")
+    # 'EXEC_DEFAULT', True: push an undo step as a button click does.
+    assert bpy.ops.shlight.compute_from_world("EXEC_DEFAULT", True) == {"FINISHED"}
+    scene = bpy.context.scene
+    expected = expected_constant()
+    assert_allclose(scene_data.get_coefficients(scene), expected, atol=FLOAT32_TOL)
+    assert_allclose(scene_data.get_computed(scene), expected, atol=FLOAT32_TOL)
+
+    bpy.ops.ed.undo()
+    scene = bpy.context.scene  # undo reloads the data: fetch it again
+    assert not scene_data.has_coefficients(scene)
+    assert scene_data.COMPUTED_PROPERTY not in scene
+    bpy.ops.ed.redo()
+    assert_allclose(scene_data.get_coefficients(bpy.context.scene), expected, atol=FLOAT32_TOL)
+
+
+def test_compute_operator_reports_elapsed_time(addon, tmp_path):
+    image_world(bpy.context.scene, write_exr(tmp_path / "constant.exr", COLOUR))
+    result, reports = run_execute(operators.SHLIGHT_OT_compute_from_world)
+    assert result == {"FINISHED"}
+    [(kind, message)] = reports
+    assert kind == {"INFO"}
+    assert message.startswith("SH lighting computed from the world image in ")
+    assert message.endswith(" s")
+
+
+def test_capture_width_comes_from_the_scene_override(addon, monkeypatch):
+    widths = []
+
+    def fake_world_coefficients(scene, capture_width=256):
+        widths.append(capture_width)
+        return KNOWN, None
+
+    monkeypatch.setattr(world, "world_coefficients", fake_world_coefficients)
+    scene = bpy.context.scene
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+    scene.sh_lighting.use_capture_width = True
+    scene.sh_lighting.capture_width = 64
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+    api.compute_from_world(scene)
+    api.compute_from_world(scene, capture_width=32)
+    # 256: no add-on preferences when registered by the test fixture rather than enabled.
+    assert widths == [properties.DEFAULT_CAPTURE_WIDTH, 64, 64, 32]
+    assert_allclose(api.get_computed(scene), KNOWN)
+
+
+def test_compute_api_on_constant_exr_world(addon, tmp_path):
+    scene = bpy.context.scene
+    image_world(scene, write_exr(tmp_path / "grey.exr", (0.75, 0.75, 0.75)), strength=0.5)
+    coeffs = api.compute_from_world(scene)
+    expected = expected_constant((0.75, 0.75, 0.75), 0.5)
+    assert coeffs.shape == (9, 3)
+    assert_allclose(coeffs, expected, atol=FLOAT32_TOL)
+    assert_allclose(api.get_coefficients(scene), expected, atol=FLOAT32_TOL)
+    assert_allclose(api.get_computed(scene), expected, atol=FLOAT32_TOL)
+    assert scene.id_properties_ui("sh_L00").as_dict()["subtype"] == "NONE"
+
+
+# --- Errors: CANCELLED, same message from operator and API, nothing changed ------------------
+
+
+def no_world(scene, tmp_path):
+    scene.world = None
+
+
+def world_without_nodes(scene, tmp_path):
+    world = bpy.data.worlds.new("No Nodes")
+    world.node_tree.nodes.clear()
+    scene.world = world
+
+
+def environment_without_image(scene, tmp_path):
+    image_world(scene, None)
+
+
+def missing_image_file(scene, tmp_path):
+    path = write_exr(tmp_path / "gone.exr", COLOUR)
+    image_world(scene, path)
+    path.unlink()
+
+
+def disconnected_output(scene, tmp_path):
+    world = image_world(scene, write_exr(tmp_path / "constant.exr", COLOUR))
+    output = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    for link in list(output.inputs["Surface"].links):
+        world.node_tree.links.remove(link)
+
+
+def scene_state(scene):
+    """Everything an error must leave alone: custom properties and the data-block names."""
+    props = {key: repr(scene[key].to_list() if hasattr(scene[key], "to_list") else scene[key])
+             for key in scene.keys()}
+    data = {
+        kind: sorted(item.name for item in getattr(bpy.data, kind))
+        for kind in ("scenes", "worlds", "images", "objects", "cameras", "node_groups")
+    }
+    return props, data
+
+
+@pytest.mark.parametrize(
+    ("make_broken_world", "says"),
+    [
+        (no_world, "has no world"),
+        (world_without_nodes, "has no World Output node"),
+        (environment_without_image, "has no image"),
+        (missing_image_file, "is missing or unreadable"),
+        (disconnected_output, "is not connected"),
+    ],
+    ids=lambda v: getattr(v, "__name__", ""),
+)
+def test_world_errors_cancel_and_change_nothing(addon, tmp_path, make_broken_world, says):
+    scene = bpy.context.scene
+    make_broken_world(scene, tmp_path)
+    properties.store_coefficients(scene, KNOWN, computed=True)
+    before = scene_state(scene)
+
+    result, reports = run_execute(operators.SHLIGHT_OT_compute_from_world)
+    assert result == {"CANCELLED"}
+    [(kind, message)] = reports
+    assert kind == {"ERROR"} and says in message
+    assert scene_state(scene) == before
+
+    with pytest.raises(RuntimeError) as raised:  # how bpy.ops surfaces an ERROR report
+        bpy.ops.shlight.compute_from_world()
+    assert message in str(raised.value)
+    assert scene_state(scene) == before
+
+    with pytest.raises(WorldError) as raised:
+        api.compute_from_world(scene)
+    assert str(raised.value) == message
+    assert isinstance(raised.value, ValueError)
+    assert scene_state(scene) == before
+    assert_allclose(api.get_coefficients(scene), KNOWN)
+
+
+# --- Editing: rows, channels, reset, keyframes ----------------------------------------------
+
+
+def test_row_value_is_channel_mean_and_rescales_the_triple(addon):
+    scene = bpy.context.scene
+    settings = scene.sh_lighting
+    coeffs = KNOWN.copy()
+    coeffs[2] = (1.0, 2.0, 3.0)
+    coeffs[3] = (0.0, 0.0, 0.0)
+    coeffs[4] = (1.0, -1.0, 0.0)
+    properties.store_coefficients(scene, coeffs)
+    assert settings.row_L10 == pytest.approx(2.0)
+
+    settings.row_L10 = 4.0  # doubles the triple, keeps its colour
+    assert list(scene["sh_L10"]) == pytest.approx([2.0, 4.0, 6.0])
+    settings.row_L10 = -1.0  # signed: flips the triple
+    assert list(scene["sh_L10"]) == pytest.approx([-0.5, -1.0, -1.5])
+    assert settings.row_L10 == pytest.approx(-1.0)
+    settings.row_L11 = 0.25  # all zero: becomes grey
+    assert list(scene["sh_L11"]) == pytest.approx([0.25, 0.25, 0.25])
+    settings.row_L2m2 = 0.5  # mean zero, cannot rescale: shifted
+    assert list(scene["sh_L2m2"]) == pytest.approx([1.5, -0.5, 0.5])
+    settings.row_L00 = 100.0  # beyond the soft limit: HDR values are not clamped
+    assert settings.row_L00 == pytest.approx(100.0)
+
+    coeffs = scene_data.get_coefficients(scene)
+    assert_allclose(coeffs[0], KNOWN[0] * (100.0 / KNOWN[0].mean()))
+    untouched = [1, 5, 6, 7, 8]
+    assert_allclose(coeffs[untouched], KNOWN[untouched])
+
+
+def test_row_on_a_scene_without_coefficients_creates_them(addon):
+    scene = bpy.context.scene
+    assert scene.sh_lighting.row_L20 == 0.0
+    scene.sh_lighting.row_L20 = -0.3
+    expected = np.zeros((9, 3))
+    expected[6] = -0.3
+    assert_allclose(scene_data.get_coefficients(scene), expected)
+    assert scene.id_properties_ui("sh_L20").as_dict()["soft_min"] == -properties.SOFT_LIMIT
+
+
+def test_per_channel_edit_and_reset(addon):
+    scene = bpy.context.scene
+    properties.store_coefficients(scene, KNOWN, computed=True)
+    scene["sh_L10"][1] = -7.5  # what the panel's G field of L10 writes
+    edited = KNOWN.copy()
+    edited[2, 1] = -7.5
+    assert_allclose(api.get_coefficients(scene), edited)
+    assert scene.sh_lighting.row_L10 == pytest.approx(edited[2].mean())
+
+    api.set_coefficients(scene, KNOWN * 3.0)
+    assert bpy.ops.shlight.reset() == {"FINISHED"}
+    assert_allclose(api.get_coefficients(scene), KNOWN)
+    assert_allclose(api.reset(scene), KNOWN)
+
+
+def test_reset_is_disabled_with_a_reason_before_any_compute(addon):
+    properties.store_coefficients(bpy.context.scene, KNOWN)
+    assert not bpy.ops.shlight.reset.poll()
+    with pytest.raises(RuntimeError, match="Nothing to reset to: run Compute from World first"):
+        bpy.ops.shlight.reset()
+    with pytest.raises(LookupError, match="Nothing to reset to: run Compute from World first"):
+        api.reset(bpy.context.scene)
+
+
+def test_coefficients_can_be_keyframed(addon):
+    scene = bpy.context.scene
+    properties.store_coefficients(scene, KNOWN)
+    assert scene.keyframe_insert('["sh_L10"]', frame=1)
+    scene["sh_L10"] = [5.0, -5.0, 9.0]
+    assert scene.keyframe_insert('["sh_L10"]', frame=11)
+    scene.frame_set(1)
+    assert list(scene["sh_L10"]) == pytest.approx(KNOWN[2])
+    scene.frame_set(6)  # midway between two auto-clamped Bézier keys: the average
+    assert list(scene["sh_L10"]) == pytest.approx((KNOWN[2] + [5.0, -5.0, 9.0]) / 2.0)
+    scene.frame_set(11)
+    assert list(scene["sh_L10"]) == pytest.approx([5.0, -5.0, 9.0])
+
+
+def test_set_coefficients_rejects_bad_input_and_keeps_values(addon):
+    scene = bpy.context.scene
+    api.set_coefficients(scene, KNOWN)
+    bad = KNOWN.copy()
+    bad[4, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        api.set_coefficients(scene, bad)
+    with pytest.raises(ValueError, match=r"shape \(9, 3\)"):
+        api.set_coefficients(scene, KNOWN[:4])
+    assert_allclose(api.get_coefficients(scene), KNOWN)
+
+
+# --- Apply / Remove -------------------------------------------------------------------------
+
+
+def two_objects_with_materials():
+    """Objects 'Lit' (selected) and 'Other', each with a Principled material of its own."""
+    scene = bpy.context.scene
+    result = []
+    for name in ("Lit", "Other"):
+        material = bpy.data.materials.new(name)
+        compat.ensure_node_tree(material)
+        mesh = bpy.data.meshes.new(name)
+        mesh.materials.append(material)
+        obj = bpy.data.objects.new(name, mesh)
+        scene.collection.objects.link(obj)
+        result.append((obj, material))
+    result[0][0].select_set(True)
+    return result
+
+
+def test_apply_and_remove_selected_then_all(addon):
+    scene = bpy.context.scene
+    (lit, lit_mat), (other, other_mat) = two_objects_with_materials()
+    properties.store_coefficients(scene, KNOWN)
+
+    result, reports = run_execute(operators.SHLIGHT_OT_apply)
+    assert result == {"FINISHED"}
+    assert reports == [({"INFO"}, "SH lighting applied to 1 material(s), 0 skipped")]
+    assert materials.is_applied(lit_mat) and not materials.is_applied(other_mat)
+
+    scene.sh_lighting.apply_target = "ALL"
+    assert bpy.ops.shlight.apply() == {"FINISHED"}
+    assert materials.is_applied(lit_mat) and materials.is_applied(other_mat)
+
+    scene.sh_lighting.apply_target = "SELECTED"
+    result, reports = run_execute(operators.SHLIGHT_OT_remove)
+    assert result == {"FINISHED"}
+    assert reports == [({"INFO"}, "SH lighting removed from 1 material(s), 0 skipped")]
+    assert not materials.is_applied(lit_mat) and materials.is_applied(other_mat)
+
+    scene.sh_lighting.apply_target = "ALL"
+    result, reports = run_execute(operators.SHLIGHT_OT_remove)
+    assert reports == [({"INFO"}, "SH lighting removed from 1 material(s), 1 skipped")]
+    assert not materials.is_applied(other_mat)
+
+
+def test_apply_api_matches_operator(addon):
+    scene = bpy.context.scene
+    (lit, lit_mat), (other, other_mat) = two_objects_with_materials()
+    api.set_coefficients(scene, KNOWN)
+    changed, skipped = api.apply_to_materials([lit_mat, other_mat, lit_mat])
+    assert changed == [lit_mat.name_full, other_mat.name_full] and skipped == []
+    assert api.ensure_node_group(scene).name == "SH Irradiance"
+    changed, skipped = api.remove_from_materials([other_mat])
+    assert changed == [other_mat.name_full]
+    assert materials.is_applied(lit_mat) and not materials.is_applied(other_mat)
+
+
+def test_apply_polls_explain_why_disabled(addon):
+    scene = bpy.context.scene
+    two_objects_with_materials()
+    with pytest.raises(RuntimeError, match="No SH coefficients yet"):
+        bpy.ops.shlight.apply()
+    properties.store_coefficients(scene, KNOWN)
+    for obj in scene.objects:
+        obj.select_set(False)
+    with pytest.raises(RuntimeError, match="No objects selected"):
+        bpy.ops.shlight.apply()
+    with pytest.raises(RuntimeError, match="No objects selected"):
+        bpy.ops.shlight.remove()

@@ -1,0 +1,147 @@
+"""Registration: nothing left behind after many enable/disable cycles, and what the UI needs
+(undoable operators, described properties without a 0-1 clamp, panels that draw valid paths).
+"""
+
+import bpy
+import pytest
+
+from sh_lighting.blender import operators, panels, properties, scene_data
+from sh_lighting.core.sh import COEFFICIENT_NAMES
+
+CYCLES = 20
+
+
+def handler_snapshot():
+    """Every list of bpy.app.handlers, as the ids of the functions it holds."""
+    return {
+        name: [id(h) for h in getattr(bpy.app.handlers, name)]
+        for name in dir(bpy.app.handlers)
+        if isinstance(getattr(bpy.app.handlers, name), list)
+    }
+
+
+def test_enable_disable_many_times_leaves_nothing_behind():
+    import sh_lighting
+
+    types_before = set(dir(bpy.types))
+    handlers_before = handler_snapshot()
+    ops_before = set(dir(bpy.ops.shlight))
+    for _ in range(CYCLES):
+        sh_lighting.register()
+        assert hasattr(bpy.types.Scene, "sh_lighting")
+        assert "SHLIGHT_OT_compute_from_world" in dir(bpy.types)
+        assert "SHLIGHT_PT_view3d_coefficients" in dir(bpy.types)
+        assert bpy.context.scene.sh_lighting.apply_target == "SELECTED"
+        sh_lighting.unregister()
+    assert not hasattr(bpy.types.Scene, "sh_lighting")
+    assert set(dir(bpy.types)) == types_before
+    assert handler_snapshot() == handlers_before
+    assert set(dir(bpy.ops.shlight)) == ops_before
+    assert not any(name.startswith("SHLIGHT_") for name in dir(bpy.types))
+
+
+def test_every_class_registered_and_gone(addon):
+    for module in (properties, operators, panels):
+        for cls in module.classes:
+            assert cls.is_registered, cls.__name__
+
+
+@pytest.mark.parametrize("cls", operators.classes, ids=lambda c: c.__name__)
+def test_operators_are_undoable(addon, cls):
+    assert {"REGISTER", "UNDO"} <= cls.bl_options
+    assert cls.__doc__
+    idname = cls.bl_idname.split(".")
+    assert "UNDO" in getattr(getattr(bpy.ops, idname[0]), idname[1]).bl_options
+
+
+def test_settings_properties_are_described_and_unclamped(addon):
+    rna = bpy.types.Scene.bl_rna.properties["sh_lighting"].fixed_type
+    names = [p.identifier for p in rna.properties if p.identifier not in {"rna_type", "name"}]
+    assert len(names) == 9 + 3
+    for prop in rna.properties:
+        if prop.identifier in {"rna_type", "name"}:
+            continue
+        assert prop.description, prop.identifier
+    for index in range(9):
+        row = rna.properties[properties.row_property_name(index)]
+        assert row.hard_min < -1e30 and row.hard_max > 1e30  # signed HDR: no clamp at all
+        assert row.soft_min == -properties.SOFT_LIMIT and row.soft_max == properties.SOFT_LIMIT
+        assert not row.is_animatable
+        assert row.name == COEFFICIENT_NAMES[index]
+
+
+def test_coefficient_custom_properties_get_ui_data(addon):
+    scene = bpy.context.scene
+    properties.store_coefficients(scene, [[-3.0, 0.5, 40.0]] * 9)
+    for index, name in enumerate(scene_data.PROPERTY_NAMES):
+        ui = scene.id_properties_ui(name).as_dict()
+        assert ui["subtype"] == "NONE"  # 3 number fields, no colour swatch
+        assert ui["min"] < -1e30 and ui["max"] > 1e30
+        assert ui["soft_min"] == -properties.SOFT_LIMIT
+        assert COEFFICIENT_NAMES[index] in ui["description"]
+        assert list(scene[name]) == [-3.0, 0.5, 40.0]  # written as given, not clamped
+
+
+class RecordingLayout:
+    """Stands in for UILayout (no UI headless): records prop/operator calls, returns itself."""
+
+    def __init__(self, calls):
+        self.calls = calls
+        self.use_property_split = False
+        self.use_property_decorate = True
+        self.active = True
+
+    def _child(self, *args, **kwargs):
+        return RecordingLayout(self.calls)
+
+    column = row = box = split = _child
+
+    def prop(self, data, path, **kwargs):
+        self.calls.append(("prop", data, path, kwargs))
+
+    def operator(self, idname, **kwargs):
+        self.calls.append(("operator", idname, kwargs))
+
+    def label(self, **kwargs):
+        self.calls.append(("label", kwargs.get("text", "")))
+
+
+def test_panels_draw_resolvable_properties_and_operators(addon):
+    scene = bpy.context.scene
+    context = bpy.context
+    calls = []
+    panels.draw_main(RecordingLayout(calls), context)
+    ops = [c[1] for c in calls if c[0] == "operator"]
+    assert ops == ["shlight.compute_from_world", "shlight.reset", "shlight.apply", "shlight.remove"]
+    for idname in ops:
+        module, name = idname.split(".")
+        assert hasattr(getattr(bpy.ops, module), name)
+
+    calls.clear()
+    panels.draw_coefficients(RecordingLayout(calls), context)
+    assert not [c for c in calls if c[0] == "prop"]  # no coefficients yet: a hint only
+    assert any("Compute" in c[1] for c in calls if c[0] == "label")
+
+    properties.store_coefficients(scene, [[float(i), 1.0, 2.0] for i in range(9)])
+    calls.clear()
+    panels.draw_coefficients(RecordingLayout(calls), context)
+    labels = [c[1] for c in calls if c[0] == "label"]
+    assert labels[2] == "L10: light from above vs below"
+    assert labels[3] == "L11: light from +X vs −X"
+    props = [c for c in calls if c[0] == "prop"]
+    assert len(props) == 9 * 4  # row value + R, G, B
+    for _, data, path, kwargs in props:
+        value = data.path_resolve(path)  # the drawn path exists
+        if "index" in kwargs:
+            assert 0 <= kwargs["index"] < len(value)
+    rgb = [(path, kwargs["index"]) for _, data, path, kwargs in props if "index" in kwargs]
+    assert rgb[6:9] == [('["sh_L10"]', 0), ('["sh_L10"]', 1), ('["sh_L10"]', 2)]
+
+
+def test_panels_live_in_world_properties_and_sidebar(addon):
+    assert panels.SHLIGHT_PT_world.bl_context == "world"
+    assert panels.SHLIGHT_PT_world.bl_space_type == "PROPERTIES"
+    assert panels.SHLIGHT_PT_view3d.bl_space_type == "VIEW_3D"
+    assert panels.SHLIGHT_PT_view3d.bl_category == "SH Lighting"
+    assert panels.SHLIGHT_PT_world_coefficients.bl_parent_id == "SHLIGHT_PT_world"
+    assert panels.SHLIGHT_PT_view3d_coefficients.bl_parent_id == "SHLIGHT_PT_view3d"
