@@ -1,7 +1,8 @@
 """`make bench`: speed of project_equirect as a ratio to one numpy pass over the same pixels.
 
-These machines are noisy, so each size is timed several times in one run and the medians are
-compared: `pixels.sum()` over the same float32 RGBA array is the yardstick. Target (issue 2):
+These machines are noisy and their speed drifts, so the two are timed in alternation, pair by
+pair, and the median of the per-pair ratios is reported: `pixels.sum()` over the same float32
+RGBA array is the yardstick. Target (issue 2):
 at most 3.0× at 4096×2048, with float64 accumulation and exactness kept.
 """
 
@@ -12,17 +13,22 @@ import numpy as np
 from sh_lighting.core import project_equirect
 
 SIZES = ((512, 1024), (2048, 4096), (4096, 8192))
-REPEATS = 7
+REPEATS = 11
 
 
-def median_seconds(function, repeats=REPEATS):
-    function()  # warm-up: page faults, BLAS threads
-    times = []
+def paired_times(first, second, repeats=REPEATS):
+    """Alternate the two calls; return their median times and the median per-pair ratio."""
+    first(), second()  # warm-up: page faults, BLAS threads
+    a, b = [], []
     for _ in range(repeats):
         start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
+        first()
+        middle = time.perf_counter()
+        second()
+        a.append(middle - start)
+        b.append(time.perf_counter() - middle)
+    ratios = np.array(b) / np.array(a)
+    return float(np.median(a)), float(np.median(b)), float(np.median(ratios))
 
 
 def main():
@@ -30,9 +36,8 @@ def main():
     print(f"{'size':>11} {'sum() ms':>9} {'project ms':>11} {'ratio':>6}")
     for h, w in SIZES:
         pixels = rng.random((h, w, 4), dtype=np.float32)
-        base = median_seconds(pixels.sum)
-        proj = median_seconds(lambda: project_equirect(pixels))
-        print(f"{w:>5}x{h:<5} {1000 * base:9.1f} {1000 * proj:11.1f} {proj / base:6.2f}")
+        base, proj, ratio = paired_times(pixels.sum, lambda: project_equirect(pixels))
+        print(f"{w:>5}x{h:<5} {1000 * base:9.1f} {1000 * proj:11.1f} {ratio:6.2f}")
 
 
 if __name__ == "__main__":

@@ -12,14 +12,12 @@ so the integral over texel (i, j) is a row weight times a column weight:
   rule of far higher degree (checked against its closed-form antiderivative);
 * column weight ∫ cos mφ dφ = (2 sin(m h) / m) cos(m φ_j) with h = π/W (sin likewise).
 
-The sum over texels is done as small matrix products over blocks of rows (the rows against
-the row weights, accumulated in float64 whatever the input dtype), then a small product with
+The sum over texels is done in two steps: blocks of rows against the row weights (one float64
+matrix product per block, whatever the input dtype), then the resulting (T, W) sums against
 the column weights. A constant map therefore gives exactly L00 = 2√π c and zeros elsewhere (to
 rounding), and replicating texels does not change the result.
 """
 
-import os
-from concurrent.futures import ThreadPoolExecutor
 from math import pi
 
 import numpy as np
@@ -27,11 +25,8 @@ import numpy as np
 from .equirect import check_pixels, column_centres, describe_nonfinite, row_centres
 from .sh import legendre_q, normalisation, num_coefficients, sh_index
 
-# Rows cast to float64 at a time, and floats per matrix product: small enough that each
-# product stays in cache and runs on one BLAS thread, so that WORKERS threads can share rows.
-ROWS_PER_BLOCK = 32
-COLUMN_CHUNK = 1024
-WORKERS = max(1, min(4, os.cpu_count() or 1))
+# Rows cast to float64 and multiplied at a time: 64 rows of a 4096-wide RGBA map are 8 MB.
+ROWS_PER_BLOCK = 64
 
 
 def _theta_functions(max_order):
@@ -95,40 +90,25 @@ def column_weights(width, max_order=2):
     return np.cos(phi) * shrink, np.sin(phi) * shrink
 
 
-def _accumulate_band(pixels, weights, r0, r1, zero_nonfinite):
-    """Σ_i w[i, t] pixels[i, j, c] over rows r0..r1 as a (T, W·C) float64 array."""
-    height, width, channels = pixels.shape
-    total = np.zeros((weights.shape[1], width * channels))
-    block = np.empty((ROWS_PER_BLOCK, width * channels))
-    for b0 in range(r0, r1, ROWS_PER_BLOCK):
-        b1 = min(r1, b0 + ROWS_PER_BLOCK)
-        x = block[: b1 - b0]
-        x.reshape(b1 - b0, width, channels)[...] = pixels[b0:b1]  # cast, any input strides
-        if zero_nonfinite:
-            x[~np.isfinite(x)] = 0.0
-        w = weights[b0:b1].T
-        for c0 in range(0, width * channels, COLUMN_CHUNK):
-            total[:, c0 : c0 + COLUMN_CHUNK] += w @ x[:, c0 : c0 + COLUMN_CHUNK]
-    return total
+def row_sums(pixels, weights, zero_nonfinite=False):
+    """B[t, j, c] = Σ_i w[i, t] pixels[i, j, c] in float64, shape (T, W, 3).
 
-
-def _accumulate_rows(pixels, weights, zero_nonfinite):
-    """B[t, j, c] = Σ_i w[i, t] pixels[i, j, c] in float64, rows split between WORKERS threads.
-
-    numpy releases the GIL while casting and multiplying, so the threads run in parallel; the
-    partial sums are added in a fixed order, so the result does not depend on timing.
+    Blocks of rows are cast to float64 (from any input dtype and strides) and multiplied by
+    their row weights in one matrix product each; only a block and B are ever held.
     """
     height, width, channels = pixels.shape
-    edges = np.linspace(0, height, min(WORKERS, height) + 1).astype(int)
-    bands = list(zip(edges[:-1], edges[1:]))
-    if len(bands) == 1:
-        parts = [_accumulate_band(pixels, weights, 0, height, zero_nonfinite)]
-    else:
-        with ThreadPoolExecutor(len(bands)) as pool:
-            parts = list(
-                pool.map(lambda b: _accumulate_band(pixels, weights, *b, zero_nonfinite), bands)
-            )
-    return sum(parts[1:], parts[0]).reshape(-1, width, channels)[..., :3]
+    total = np.zeros((weights.shape[1], width * channels))
+    product = np.empty_like(total)
+    block = np.empty((ROWS_PER_BLOCK, width * channels))
+    for r0 in range(0, height, ROWS_PER_BLOCK):
+        r1 = min(height, r0 + ROWS_PER_BLOCK)
+        x = block[: r1 - r0]
+        x.reshape(r1 - r0, width, channels)[...] = pixels[r0:r1]
+        if zero_nonfinite:
+            x[~np.isfinite(x)] = 0.0
+        np.dot(weights[r0:r1].T, x, out=product)
+        total += product
+    return total.reshape(-1, width, channels)[..., :3]
 
 
 def project_equirect(pixels, max_order=2, nonfinite="raise"):
@@ -150,23 +130,22 @@ def project_equirect(pixels, max_order=2, nonfinite="raise"):
 
 def _combine(a, weights, max_order, nonfinite):
     """Row sums, the non-finite policy, then the column weights: ((max_order+1)², 3)."""
-    height, width, _ = a.shape
-    rows_b = _accumulate_rows(a, weights, zero_nonfinite=False)
-    if not np.isfinite(rows_b).all():
+    sums = row_sums(a, weights)
+    if not np.isfinite(sums).all():
         count, message = describe_nonfinite(a)
         if count and nonfinite == "raise":
             raise ValueError(
                 f"pixels contain {message}: repair the image, or pass nonfinite='zero' "
                 "to treat those texels as black"
             )
-        rows_b = _accumulate_rows(a, weights, zero_nonfinite=True)
-    cos_w, sin_w = column_weights(width, max_order)
+        sums = row_sums(a, weights, zero_nonfinite=True)
+    cos_w, sin_w = column_weights(a.shape[1], max_order)
     coeffs = np.zeros((num_coefficients(max_order), 3))
     for t, (l, m) in enumerate(_theta_functions(max_order)):
-        coeffs[sh_index(l, m)] = cos_w[:, m] @ rows_b[t]
+        coeffs[sh_index(l, m)] = cos_w[:, m] @ sums[t]
         if m > 0:
-            coeffs[sh_index(l, -m)] = sin_w[:, m] @ rows_b[t]
-    if not (np.isfinite(rows_b).all() and np.isfinite(coeffs).all()):
+            coeffs[sh_index(l, -m)] = sin_w[:, m] @ sums[t]
+    if not (np.isfinite(sums).all() and np.isfinite(coeffs).all()):
         raise ValueError(
             "the image's values are too large: its integrals overflow float64 "
             f"(largest texel {np.nanmax(np.abs(a[..., :3])):.3g}); scale the image down"
