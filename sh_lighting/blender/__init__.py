@@ -4,9 +4,9 @@ Each module exports ``register()``/``unregister()``; they are called in ``MODULE
 and undone in reverse.
 """
 
-from . import operators, panels, preferences, properties
+from . import design_ui, operators, panels, preferences, presets_ui, properties
 
-MODULES = (preferences, properties, operators, panels)
+MODULES = (preferences, properties, operators, panels, presets_ui, design_ui)
 
 
 def register():
