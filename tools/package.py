@@ -1,8 +1,9 @@
 """Build the installable extension zip with Blender's own extension tool.
 
-The repository keeps ``blender_manifest.toml`` at the top level beside the ``sh_lighting``
-package; Blender wants the manifest next to ``__init__.py``. This stages both into
-a temporary folder, runs ``blender_ext.py validate`` and ``build`` on it, and prints the zip.
+The repository keeps ``blender_manifest.toml`` and the shipped ``presets/*.json`` at the top
+level beside the ``sh_lighting`` package; Blender wants the manifest next to ``__init__.py``.
+This stages them (the presets into the package's ``presets/``) in a temporary folder, runs
+``blender_ext.py validate`` and ``build`` on it, and prints the zip.
 
 Usage: python -m tools.package [OUTPUT_DIR]   (default: dist)
 """
@@ -26,12 +27,19 @@ def blender_ext_command():
 
 
 def stage(destination):
-    """Copy the package, manifest and licence into the new folder ``destination``."""
+    """Copy the package, manifest, licence and shipped presets into the new folder
+    ``destination``; the presets go to ``presets/`` inside the package, where
+    ``sh_lighting.blender.preset_io.shipped_preset_dir`` looks once installed.
+    """
     shutil.copytree(
         ROOT / "sh_lighting", destination, ignore=shutil.ignore_patterns("__pycache__", "*.pyc")
     )
     for name in ("blender_manifest.toml", "LICENSE"):
         shutil.copy2(ROOT / name, destination / name)
+    presets = destination / "presets"
+    presets.mkdir(exist_ok=True)
+    for preset in sorted((ROOT / "presets").glob("*.json")):
+        shutil.copy2(preset, presets / preset.name)
     return destination
 
 

@@ -1,0 +1,276 @@
+"""Presets on disk: export and import a scene's coefficients, shipped and user presets.
+
+Plain functions for the operators (``presets_ui``), the command line (``sh_lighting.cli``) and
+scripts (``sh_lighting.api``); none reads ``bpy.context``: the scene is an argument.
+
+Formats written by :func:`export_preset` (``FORMATS``), every one atomically (a temporary file
+moved into place, ``core.atomic``) and never over an existing file unless ``overwrite=True``:
+
+* ``"sh_lighting"``: our preset JSON (``core.presets``: raw L_lm, Blender axes), with metadata;
+* ``"threejs"``: JSON ``{"type": "LightProbe", "intensity": 1, "sh": [27 floats], ...}``,
+  what ``new LightProbe().fromJSON(json)`` reads (``sh`` alone feeds
+  ``SphericalHarmonics3.fromArray``): radiance L_lm, y-up glTF frame (``core.interop``);
+* ``"gltf"``: JSON of one ``EXT_lights_image_based`` light without its specular images:
+  ``{"name", "intensity", "rotation", "irradianceCoefficients": 9×3, "extras"}``; the
+  coefficients are (−1)^|m| Â_l L_lm in the glTF frame (what Babylon.js reads; see interop);
+* ``"filament"``: cmgen ``sh.txt`` text, 9 lines of shader-ready (pre-scaled) values, glTF
+  frame, no windowing.
+
+Importing reads our JSON format only; the coefficients become the scene's current values.
+They do **not** become the Reset values: Reset keeps meaning "the values last computed from
+the world" (its tooltip says so), and Undo returns to the values before the import.
+
+Metadata of an exported preset: ``created`` (today), ``name`` (the file's stem unless given)
+and, when the scene's coefficients are exactly the ones last computed from the world and that
+world is an Environment Texture read directly, ``source`` (the image file), ``mapping`` and
+``strength``. Anything else is not known from a scene and is omitted (callers that know more,
+such as ``sh_lighting.cli compute`` with its error estimate, pass ``metadata``).
+
+Shipped presets are the package's ``presets`` folder once installed (``tools/package.py``
+copies them there), else the repository's ``presets`` folder beside the package. User presets
+are JSON files in Blender's user preset folder for this add-on,
+``<user scripts>/presets/sh_lighting`` (``bpy.utils.user_resource``), named by a sanitised
+version of the preset's name; removing one never touches the shipped folder.
+"""
+
+import json
+import os
+import re
+from datetime import date
+from pathlib import Path
+
+import bpy
+import numpy as np
+
+from ..core import atomic
+from ..core.interop import to_filament_sh_txt, to_gltf_irradiance_coefficients, to_threejs_sh
+from ..core.presets import PresetError, preset_to_json, read_preset
+from . import properties, scene_data
+from . import world as world_module
+
+# format id -> (label, file extension)
+FORMATS = {
+    "sh_lighting": ("sh_lighting JSON", ".json"),
+    "threejs": ("three.js SphericalHarmonics3 JSON", ".json"),
+    "gltf": ("glTF EXT_lights_image_based irradianceCoefficients JSON", ".json"),
+    "filament": ("Filament sh.txt", ".txt"),
+}
+PRESET_SUBDIR = "sh_lighting"
+PRESET_EXTENSION = ".json"
+MAX_NAME_LENGTH = 64
+GENERATOR = "sh_lighting"
+OVERWRITE_HINT = "enable Overwrite (overwrite=True) to replace it"
+
+_PACKAGE_DIR = Path(__file__).resolve().parent.parent
+
+
+# --- folders -------------------------------------------------------------------------------
+
+
+def shipped_preset_dir():
+    """The folder of the presets shipped with the add-on, or None if there is none."""
+    for folder in (_PACKAGE_DIR / "presets", _PACKAGE_DIR.parent / "presets"):
+        if folder.is_dir():
+            return folder
+    return None
+
+
+def user_preset_dir(create=False):
+    """Blender's user preset folder of this add-on: ``<user scripts>/presets/sh_lighting``."""
+    return Path(
+        bpy.utils.user_resource("SCRIPTS", path=f"presets/{PRESET_SUBDIR}", create=create)
+    )
+
+
+def _json_files(folder):
+    if folder is None or not folder.is_dir():
+        return {}
+    files = [
+        p for p in folder.iterdir()
+        if p.suffix.lower() == PRESET_EXTENSION and not p.name.startswith(".") and p.is_file()
+    ]
+    return {p.stem: p for p in sorted(files, key=lambda p: p.stem.lower())}
+
+
+def shipped_presets():
+    """{name: Path} of the shipped presets (file stems, sorted case-insensitively)."""
+    return _json_files(shipped_preset_dir())
+
+
+def user_presets():
+    """{name: Path} of the user's presets (file stems, sorted case-insensitively)."""
+    return _json_files(user_preset_dir())
+
+
+def preset_file_name(name):
+    """The file name of a user preset called ``name``: letters, digits, ``-`` and ``_`` kept,
+    every other run of characters replaced by one ``_``; ValueError if nothing is left.
+    """
+    if not isinstance(name, str):
+        raise ValueError(f"a preset name is text, got {type(name).__name__}")
+    stem = re.sub(r"[^A-Za-z0-9_-]+", "_", name.strip()).strip("_")[:MAX_NAME_LENGTH]
+    if not stem:
+        raise ValueError(
+            f"preset name {name!r} has no letters or digits: give it a name such as 'Studio Warm'"
+        )
+    return stem + PRESET_EXTENSION
+
+
+# --- metadata ------------------------------------------------------------------------------
+
+
+def scene_metadata(scene):
+    """What is known about where the scene's current coefficients came from (may be empty
+    apart from ``created``); see the module docstring.
+    """
+    metadata = {"created": date.today().isoformat()}
+    computed = scene_data.get_computed(scene)
+    if computed is None or not scene_data.has_coefficients(scene):
+        return metadata
+    if not np.array_equal(computed, scene_data.get_coefficients(scene)):
+        return metadata  # edited or loaded since: the world is not their source
+    try:  # read the world's node tree only (no pixels); any surprise means "unknown"
+        output = world_module._check_world(scene.world, scene.name)
+        plan = world_module._image_plan(output)
+    except Exception:  # noqa: BLE001 - metadata is optional
+        return metadata
+    image = plan.image
+    path = bpy.path.abspath(image.filepath, library=image.library) if image.filepath else ""
+    metadata["source"] = os.path.normpath(path) if path else f"image '{image.name}'"
+    metadata["mapping"] = list(plan.rotation) if plan.rotation is not None else [0.0, 0.0, 0.0]
+    metadata["strength"] = plan.strength
+    return metadata
+
+
+# --- export / import -----------------------------------------------------------------------
+
+
+def _format_id(format):
+    key = str(format).lower()
+    if key not in FORMATS:
+        raise ValueError(f"unknown preset format {format!r}: use one of {', '.join(FORMATS)}")
+    return key
+
+
+def export_text(coeffs, format="sh_lighting", metadata=None):
+    """The text of ``coeffs`` (9, 3) in ``format`` (see ``FORMATS``), with ``metadata``."""
+    key = _format_id(format)
+    metadata = dict(metadata or {})
+    if key == "sh_lighting":
+        return preset_to_json(coeffs, metadata)
+    if key == "filament":
+        return to_filament_sh_txt(coeffs)
+    extras = {"generator": GENERATOR, "frame": "gltf_y_up", **metadata}
+    if key == "threejs":
+        d = {
+            "type": "LightProbe",
+            "name": metadata.get("name", ""),
+            "intensity": 1.0,
+            "sh": to_threejs_sh(coeffs),
+            "userData": extras,
+        }
+    else:
+        d = {
+            "name": metadata.get("name", ""),
+            "intensity": 1.0,
+            "rotation": [0.0, 0.0, 0.0, 1.0],
+            "irradianceCoefficients": to_gltf_irradiance_coefficients(coeffs),
+            "extras": extras,
+        }
+    return json.dumps(d, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+
+
+def export_coefficients(coeffs, path, format="sh_lighting", overwrite=False, metadata=None):
+    """Write ``coeffs`` (9, 3) to ``path`` in ``format``, atomically; returns the Path.
+
+    FileExistsError if ``path`` exists and ``overwrite`` is false (nothing written); ValueError
+    (PresetError for our format) for coefficients or metadata that cannot be written.
+    """
+    path = Path(path)
+    metadata = dict(metadata or {})
+    metadata.setdefault("name", path.stem)
+    text = export_text(coeffs, format, metadata)  # every check happens before any write
+    return atomic.write_text_atomic(path, text, overwrite, what="file", hint=OVERWRITE_HINT)
+
+
+def export_preset(scene, path, format="sh_lighting", overwrite=False, metadata=None):
+    """Write ``scene``'s coefficients to ``path`` in ``format`` (see ``FORMATS``); the Path.
+
+    ``metadata`` entries are added to (and win over) ``scene_metadata(scene)``. LookupError
+    if the scene has no coefficients, FileExistsError if ``path`` exists and ``overwrite`` is
+    false; in every error case nothing is written.
+    """
+    coeffs = scene_data.get_coefficients(scene)
+    merged = scene_metadata(scene)
+    merged.update(metadata or {})
+    return export_coefficients(coeffs, path, format, overwrite, merged)
+
+
+def read_preset_file(path):
+    """(coefficients (9, 3), metadata) of our preset JSON at ``path``; PresetError if invalid,
+    OSError (FileNotFoundError, ...) if unreadable."""
+    path = Path(path)
+    if path.is_dir():
+        raise PresetError(f"'{path}' is a folder: choose a preset file (.json)")
+    return read_preset(path)
+
+
+def import_preset(scene, path):
+    """Set ``scene``'s coefficients from our preset JSON at ``path``; returns them (9, 3).
+
+    Reads and checks the whole file first: on PresetError / OSError the scene is unchanged.
+    The values do not become the Reset values (module docstring).
+    """
+    coeffs, _metadata = read_preset_file(path)
+    return properties.store_coefficients(scene, coeffs)
+
+
+# --- user presets --------------------------------------------------------------------------
+
+
+def save_user_preset(scene, name, overwrite=False):
+    """Save ``scene``'s coefficients as the user preset ``name``; returns the Path.
+
+    The file is ``user_preset_dir() / preset_file_name(name)`` (the folder is created);
+    FileExistsError if it exists and ``overwrite`` is false.
+    """
+    file_name = preset_file_name(name)
+    folder = user_preset_dir(create=True)
+    folder.mkdir(parents=True, exist_ok=True)
+    return export_preset(
+        scene, folder / file_name, "sh_lighting", overwrite, {"name": name.strip()}
+    )
+
+
+def _user_preset_path(name):
+    """The file of user preset ``name``: its exact file stem if such a file exists (files put
+    there by hand may have any name), else the sanitised name."""
+    folder = user_preset_dir()
+    if (
+        isinstance(name, str) and name and not name.startswith(".")
+        and os.path.basename(name) == name and name not in (".", "..")
+    ):
+        exact = folder / (name + PRESET_EXTENSION)
+        if exact.is_file():
+            return exact
+    return folder / preset_file_name(name)
+
+
+def remove_user_preset(name):
+    """Delete the user preset ``name`` (a name from ``user_presets()`` or as given to
+    ``save_user_preset``); returns the deleted Path.
+
+    FileNotFoundError if there is no such user preset; PermissionError for a shipped preset
+    (shipped presets are never deleted).
+    """
+    path = _user_preset_path(name)
+    shipped = shipped_preset_dir()
+    refusal = PermissionError(f"'{name}' is a shipped preset: shipped presets cannot be removed")
+    if shipped is not None and path.resolve().parent == shipped.resolve():
+        raise refusal
+    if not path.is_file():
+        if name in shipped_presets() or Path(preset_file_name(name)).stem in shipped_presets():
+            raise refusal
+        raise FileNotFoundError(f"there is no user preset '{name}' in '{path.parent}'")
+    path.unlink()
+    return path

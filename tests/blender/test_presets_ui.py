@@ -1,0 +1,408 @@
+"""Presets: export/import through the operators and ``preset_io``, the four export formats,
+overwrite refusal and atomic writes, malformed files, shipped and user presets, the menu.
+
+User presets live in Blender's user preset folder, which ``bpy.utils.user_resource`` derives
+from BLENDER_USER_RESOURCES each time it is called (checked on 4.2 and 5.0): the ``user_dir``
+fixture points it into ``tmp_path`` and checks that it did, so the real folder is never used.
+"""
+
+import json
+import math
+import os
+from datetime import date
+from pathlib import Path
+from types import SimpleNamespace
+
+import bpy
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose, assert_array_equal
+
+from sh_lighting.blender import preset_io, presets_ui, scene_data
+from sh_lighting.core import atomic, interop
+from sh_lighting.core.presets import PresetError, read_preset, write_preset
+from tools import package
+
+pytestmark = pytest.mark.blender
+
+ROOT = Path(__file__).resolve().parents[2]
+KNOWN = np.arange(27, dtype=np.float64).reshape(9, 3) / 10.0 - 1.0  # signed, some > 1
+OTHER = np.linspace(-0.7, 2.3, 27).reshape(9, 3)
+# The interop round trips are exact SH rotations (entries snapped to 0, ±½, ±√3/2, ±1) and
+# one scale per band: a few float64 roundings.
+ROUND_TRIP = 1e-13
+FORMATS = ("SH_LIGHTING", "THREEJS", "GLTF", "FILAMENT")
+SHIPPED = sorted(p.stem for p in (ROOT / "presets").glob("*.json"))
+
+
+def read_back(path, fmt):
+    """(9, 3) Blender-axes L_lm from an exported file, with the core's importers."""
+    text = Path(path).read_text(encoding="utf-8")
+    if fmt == "SH_LIGHTING":
+        return read_preset(path)[0]
+    if fmt == "FILAMENT":
+        return interop.from_filament_sh_txt(text)
+    data = json.loads(text)
+    if fmt == "THREEJS":
+        assert data["type"] == "LightProbe" and data["intensity"] == 1.0
+        assert len(data["sh"]) == 27
+        return interop.from_threejs_sh(data["sh"])
+    assert data["intensity"] == 1.0 and data["rotation"] == [0.0, 0.0, 0.0, 1.0]
+    return interop.from_gltf_irradiance_coefficients(data["irradianceCoefficients"])
+
+
+def leftovers(folder):
+    """Hidden temporary files a failed write could have left behind."""
+    return sorted(p.name for p in Path(folder).iterdir() if p.name.startswith("."))
+
+
+@pytest.fixture
+def scene(addon):
+    scene = bpy.context.scene
+    scene_data.set_coefficients(scene, KNOWN)
+    return scene
+
+
+@pytest.fixture
+def user_dir(tmp_path, monkeypatch):
+    resources = tmp_path / "user_resources"
+    monkeypatch.setenv("BLENDER_USER_RESOURCES", str(resources))
+    monkeypatch.delenv("BLENDER_USER_SCRIPTS", raising=False)
+    folder = preset_io.user_preset_dir()
+    assert folder == resources / "scripts" / "presets" / "sh_lighting"
+    return folder
+
+
+# --- export / import round trips -----------------------------------------------------------
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_export_operator_writes_each_format_readable_back(scene, tmp_path, fmt):
+    ext = preset_io.FORMATS[fmt.lower()][1]
+    path = tmp_path / f"lighting{ext}"
+    result = bpy.ops.shlight.export_preset("EXEC_DEFAULT", filepath=str(path), export_format=fmt)
+    assert result == {"FINISHED"}
+    assert_allclose(read_back(path, fmt), KNOWN, rtol=0, atol=ROUND_TRIP)
+    assert leftovers(tmp_path) == []
+
+
+def test_formats_differ_as_documented(scene, tmp_path):
+    """three.js holds radiance in y-up axes, glTF irradiance with (−1)^|m|, Filament pre-scaled:
+    spot checks that the files are not all the same numbers."""
+    for fmt in ("threejs", "gltf", "filament"):
+        preset_io.export_preset(scene, tmp_path / f"x_{fmt}", fmt)
+    sh = json.loads((tmp_path / "x_threejs").read_text())["sh"]
+    # y-up: (x, y, z)_gltf = (x, z, -y)_blender, so L1-1 (y) of three.js is Blender's L10.
+    assert_allclose(sh[3:6], KNOWN[2], atol=ROUND_TRIP)
+    gltf = json.loads((tmp_path / "x_gltf").read_text())["irradianceCoefficients"]
+    assert_allclose(gltf[0], math.pi * KNOWN[0], atol=ROUND_TRIP)  # Â_0 = π, sign +
+    assert_allclose(gltf[3], -2.0 * math.pi / 3.0 * KNOWN[3], atol=ROUND_TRIP)  # L11: −Â_1
+    lines = (tmp_path / "x_filament").read_text().splitlines()
+    assert len(lines) == 9 and lines[0].startswith("(") and "// L00" in lines[0]
+
+
+def test_import_operator_round_trip_with_undo(scene, tmp_path):
+    path = preset_io.export_preset(scene, tmp_path / "known.json")
+    scene_data.set_coefficients(scene, OTHER)
+    bpy.ops.ed.undo_push(message="before import")
+    assert bpy.ops.shlight.import_preset("EXEC_DEFAULT", True, filepath=str(path)) == {
+        "FINISHED"
+    }
+    assert_array_equal(scene_data.get_coefficients(bpy.context.scene), KNOWN)
+    bpy.ops.ed.undo()
+    assert_array_equal(scene_data.get_coefficients(bpy.context.scene), OTHER)
+
+
+def test_preset_io_round_trip_and_metadata(scene, tmp_path):
+    path = preset_io.export_preset(scene, tmp_path / "mine.json", metadata={"notes": "hi"})
+    coeffs, metadata = read_preset(path)
+    assert_array_equal(coeffs, KNOWN)  # JSON floats are written exactly
+    assert metadata["name"] == "mine" and metadata["notes"] == "hi"
+    assert metadata["created"] == date.today().isoformat()
+    assert "source" not in metadata  # the scene's values were not computed from its world
+    scene_data.set_coefficients(scene, OTHER)
+    assert_array_equal(preset_io.import_preset(scene, path), KNOWN)
+    assert_array_equal(scene_data.get_coefficients(scene), KNOWN)
+
+
+def test_import_keeps_the_reset_values(scene, tmp_path):
+    scene_data.set_coefficients(scene, OTHER, computed=True)
+    path = write_preset(tmp_path / "p.json", KNOWN)
+    preset_io.import_preset(scene, path)
+    assert_array_equal(scene_data.get_coefficients(scene), KNOWN)
+    assert_array_equal(scene_data.get_computed(scene), OTHER)
+
+
+def write_constant_exr(path, rgb, width=16, height=8):
+    image = bpy.data.images.new("tmp", width, height, float_buffer=True, alpha=True)
+    image.pixels.foreach_set(np.tile(np.array([*rgb, 1.0], np.float32), width * height))
+    temp_scene = bpy.data.scenes.new("tmp")
+    settings = temp_scene.render.image_settings
+    settings.file_format, settings.color_mode, settings.color_depth = "OPEN_EXR", "RGBA", "32"
+    image.save_render(str(path), scene=temp_scene)
+    bpy.data.scenes.remove(temp_scene)
+    bpy.data.images.remove(image)
+    return path
+
+
+def test_metadata_names_the_world_image_while_the_values_are_the_computed_ones(addon, tmp_path):
+    scene = bpy.context.scene
+    exr = write_constant_exr(tmp_path / "sky.exr", (0.5, 1.0, 2.0))
+    world = bpy.data.worlds.new("W")
+    if world.node_tree is None:
+        world.use_nodes = True
+    tree = world.node_tree
+    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    background.inputs["Strength"].default_value = 3.0
+    texture = tree.nodes.new("ShaderNodeTexEnvironment")
+    texture.image = bpy.data.images.load(str(exr))
+    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
+    scene.world = world
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+
+    metadata = read_preset(preset_io.export_preset(scene, tmp_path / "a.json"))[1]
+    assert metadata["source"] == str(exr)
+    assert metadata["strength"] == 3.0 and metadata["mapping"] == [0.0, 0.0, 0.0]
+
+    coeffs = scene_data.get_coefficients(scene)
+    coeffs[0, 0] += 0.25  # an edit: the image is no longer the whole story
+    scene_data.set_coefficients(scene, coeffs)
+    metadata = read_preset(preset_io.export_preset(scene, tmp_path / "b.json"))[1]
+    assert "source" not in metadata and "strength" not in metadata
+
+
+# --- refusals and atomic writes ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_export_refuses_to_overwrite_unless_asked(scene, tmp_path, fmt):
+    path = tmp_path / "taken.json"
+    path.write_text("keep me")
+    with pytest.raises(RuntimeError, match="already exists"):
+        bpy.ops.shlight.export_preset(filepath=str(path), export_format=fmt)
+    assert path.read_text() == "keep me"
+    with pytest.raises(FileExistsError):
+        preset_io.export_preset(scene, path, fmt.lower())
+    assert path.read_text() == "keep me"
+    assert bpy.ops.shlight.export_preset(
+        filepath=str(path), export_format=fmt, overwrite=True
+    ) == {"FINISHED"}
+    assert_allclose(read_back(path, fmt), KNOWN, atol=ROUND_TRIP)
+    assert leftovers(tmp_path) == []
+
+
+def test_failed_atomic_write_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch):
+    path = tmp_path / "p.json"
+    path.write_text("old")
+
+    def broken_replace(src, dst):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", broken_replace)
+    with pytest.raises(OSError, match="disk full"):
+        atomic.write_text_atomic(path, "new", overwrite=True)
+    with pytest.raises(OSError, match="disk full"):
+        with atomic.atomic_destination(path, overwrite=True) as temporary:
+            temporary.write_text("new")
+    assert path.read_text() == "old"
+    assert leftovers(tmp_path) == []
+
+
+def test_atomic_destination_refuses_missing_output_and_existing_file(tmp_path):
+    with pytest.raises(FileNotFoundError, match="nothing was written"):
+        with atomic.atomic_destination(tmp_path / "out.bin"):
+            pass  # the writer wrote nothing
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "x").write_text("a")
+    with pytest.raises(FileExistsError, match="already exists"):
+        with atomic.atomic_destination(tmp_path / "x"):
+            pytest.fail("must refuse before the block runs")
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        atomic.write_text_atomic(tmp_path / "no" / "dir.json", "x")
+
+
+def test_export_without_coefficients_is_refused_with_a_reason(addon, tmp_path):
+    with pytest.raises(RuntimeError, match="No SH coefficients yet"):
+        bpy.ops.shlight.export_preset(filepath=str(tmp_path / "x.json"))
+    with pytest.raises(LookupError):
+        preset_io.export_preset(bpy.context.scene, tmp_path / "x.json")
+    assert list(tmp_path.iterdir()) == []
+
+
+MALFORMED = {
+    "not_json": '{"format": "sh_lighting.preset", ',
+    "missing_coefficient": json.dumps({
+        "format": "sh_lighting.preset", "version": 1, "frame": "blender_world_z_up",
+        "coefficients": {f"L{i}": [0, 0, 0] for i in range(8)},
+    }),
+    "nan": (ROOT / "presets" / "forest.json").read_text().replace("2.683844696604473", "NaN"),
+    "other_frame": (ROOT / "presets" / "forest.json").read_text().replace(
+        "blender_world_z_up", "gltf_y_up"),
+    "three_js_file": json.dumps({"sh": list(range(27))}),
+}
+
+
+@pytest.mark.parametrize("case", [*MALFORMED, "binary", "folder", "missing"])
+@pytest.mark.parametrize("operator", ["import_preset", "load_preset"])
+def test_malformed_preset_is_an_error_and_changes_nothing(scene, tmp_path, case, operator):
+    scene_data.set_coefficients(scene, KNOWN, computed=True)
+    path = tmp_path / f"{case}.json"
+    if case in MALFORMED:
+        path.write_text(MALFORMED[case])
+    elif case == "binary":
+        path.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
+    elif case == "folder":
+        path.mkdir()
+    with pytest.raises(RuntimeError, match="Preset not loaded, nothing changed"):
+        getattr(bpy.ops.shlight, operator)(filepath=str(path))
+    with pytest.raises((PresetError, OSError)):
+        preset_io.import_preset(scene, path)
+    assert_array_equal(scene_data.get_coefficients(scene), KNOWN)
+    assert_array_equal(scene_data.get_computed(scene), KNOWN)
+
+
+# --- shipped and user presets --------------------------------------------------------------
+
+
+def test_shipped_presets_are_listed_and_load(scene):
+    shipped = preset_io.shipped_presets()
+    assert len(SHIPPED) >= 11
+    assert list(shipped) == sorted(shipped, key=str.lower)
+    assert set(SHIPPED) <= set(shipped)
+    path = shipped["forest"]
+    assert bpy.ops.shlight.load_preset(filepath=str(path)) == {"FINISHED"}
+    assert_array_equal(scene_data.get_coefficients(scene), read_preset(path)[0])
+    assert presets_ui.SHLIGHT_MT_presets.bl_label == "forest"
+
+
+def test_package_ships_the_presets_where_preset_io_looks(tmp_path, monkeypatch):
+    staged = package.stage(tmp_path / "sh_lighting")
+    assert sorted(p.stem for p in (staged / "presets").glob("*.json")) == SHIPPED
+    monkeypatch.setattr(preset_io, "_PACKAGE_DIR", staged)
+    assert preset_io.shipped_preset_dir() == staged / "presets"
+    assert list(preset_io.shipped_presets()) == SHIPPED
+
+
+def test_user_presets_add_list_and_remove(scene, user_dir):
+    assert preset_io.user_presets() == {}
+    assert bpy.ops.shlight.preset_add(name="  My warm / studio! ") == {"FINISHED"}
+    path = user_dir / "My_warm_studio.json"
+    coeffs, metadata = read_preset(path)
+    assert_array_equal(coeffs, KNOWN)
+    assert metadata["name"] == "My warm / studio!"
+    assert preset_io.user_presets() == {"My_warm_studio": path}
+
+    scene_data.set_coefficients(scene, OTHER)
+    with pytest.raises(RuntimeError, match="already exists"):
+        bpy.ops.shlight.preset_add(name="My warm / studio!")
+    assert_array_equal(read_preset(path)[0], KNOWN)
+    assert bpy.ops.shlight.preset_add(name="My warm / studio!", overwrite=True) == {"FINISHED"}
+    assert_array_equal(read_preset(path)[0], OTHER)
+
+    with pytest.raises(RuntimeError, match="no letters or digits"):
+        bpy.ops.shlight.preset_add(name=" /// ")
+    assert bpy.ops.shlight.preset_remove(name="My_warm_studio") == {"FINISHED"}
+    assert not path.exists() and preset_io.user_presets() == {}
+    with pytest.raises(RuntimeError, match="no user preset"):
+        bpy.ops.shlight.preset_remove(name="My_warm_studio")
+
+
+def test_a_preset_dropped_in_by_hand_keeps_its_name_and_can_be_removed(scene, user_dir):
+    user_dir.mkdir(parents=True)
+    path = write_preset(user_dir / "Sky blue.json", KNOWN)
+    assert preset_io.user_presets() == {"Sky blue": path}
+    assert preset_io.remove_user_preset("Sky blue") == path
+    assert not path.exists()
+
+
+def test_shipped_presets_cannot_be_removed(scene, user_dir):
+    shipped = preset_io.shipped_presets()["forest"]
+    with pytest.raises(RuntimeError, match="shipped presets cannot be removed"):
+        bpy.ops.shlight.preset_remove(name="forest")
+    with pytest.raises(PermissionError):
+        preset_io.remove_user_preset("forest")
+    assert shipped.is_file()
+
+
+# --- the menu and panels -------------------------------------------------------------------
+
+
+class FakeLayout:
+    """Records what a draw function asks for: (kind, text, properties set on the operator)."""
+
+    def __init__(self, log=None):
+        self.log = [] if log is None else log
+
+    def operator(self, idname, text="", icon="NONE", translate=True):
+        props = SimpleNamespace()
+        self.log.append(("operator", idname, text, props))
+        return props
+
+    def row(self, align=False):
+        return FakeLayout(self.log)
+
+    def menu(self, idname, text=""):
+        self.log.append(("menu", idname, text, None))
+
+    def label(self, text="", icon="NONE"):
+        self.log.append(("label", None, text, None))
+
+    def separator(self):
+        pass
+
+
+def test_menu_lists_shipped_then_user_presets_with_remove_buttons(scene, user_dir):
+    preset_io.save_user_preset(scene, "Late Sun")
+    layout = FakeLayout()
+    presets_ui.draw_preset_menu(layout)
+    loads = [(text, props.filepath) for kind, op, text, props in layout.log
+             if op == presets_ui.LOAD]
+    removes = [props.name for kind, op, text, props in layout.log if op == presets_ui.REMOVE]
+    shipped = preset_io.shipped_presets()
+    assert loads[: len(shipped)] == [
+        (bpy.path.display_name(name, has_ext=False), str(path)) for name, path in shipped.items()
+    ]
+    assert ("Grace Cathedral", str(shipped["grace_cathedral"])) in loads
+    assert loads[len(shipped):] == [("Late Sun", str(user_dir / "Late_Sun.json"))]
+    assert removes == ["Late_Sun"]  # never one for a shipped preset
+    assert any(op == presets_ui.ADD for _kind, op, _text, _props in layout.log)
+    for kind, idname, _text, props in layout.log:  # what the menu sets exists on the operator
+        if kind == "operator":
+            rna = getattr(bpy.ops.shlight, idname.split(".")[1]).get_rna_type()
+            assert set(vars(props)) <= set(rna.properties.keys()), idname
+
+
+def test_operators_that_change_the_scene_are_undoable_and_file_ones_are_not(addon):
+    for idname in (presets_ui.LOAD, presets_ui.IMPORT):
+        assert "UNDO" in getattr(bpy.ops.shlight, idname.split(".")[1]).bl_options
+    for idname in (presets_ui.EXPORT, presets_ui.ADD, presets_ui.REMOVE):
+        assert "UNDO" not in getattr(bpy.ops.shlight, idname.split(".")[1]).bl_options
+    for cls in presets_ui.classes:
+        assert cls.is_registered and (cls.__doc__ or cls.bl_label), cls.__name__
+
+
+def test_presets_sub_panels_sit_under_both_main_panels(addon):
+    layout = FakeLayout()
+    presets_ui.draw_presets(layout, bpy.context)
+    drawn = [op for _kind, op, _text, _props in layout.log]
+    assert drawn == ["SHLIGHT_MT_presets", presets_ui.ADD, presets_ui.IMPORT, presets_ui.EXPORT]
+    assert bpy.types.SHLIGHT_PT_world_presets.bl_parent_id == "SHLIGHT_PT_world"
+    assert bpy.types.SHLIGHT_PT_view3d_presets.bl_parent_id == "SHLIGHT_PT_view3d"
+    assert bpy.types.SHLIGHT_PT_view3d_presets.bl_category == "SH Lighting"
+
+
+@pytest.mark.parametrize(
+    "fmt, given, expected",
+    [
+        ("FILAMENT", "/x/light.json", "/x/light.txt"),
+        ("THREEJS", "/x/light.txt", "/x/light.json"),
+        ("GLTF", "/x/light", "/x/light.json"),
+        ("SH_LIGHTING", "/x/light.v2", "/x/light.v2.json"),
+        ("SH_LIGHTING", "/x/light.json", "/x/light.json"),
+    ],
+)
+def test_file_browser_gives_the_format_its_extension(fmt, given, expected):
+    fake = SimpleNamespace(export_format=fmt, filepath=given)
+    changed = presets_ui.SHLIGHT_OT_export_preset.check(fake, None)
+    assert fake.filepath == expected
+    assert changed == (given != expected)
