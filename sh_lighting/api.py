@@ -14,16 +14,45 @@ Example::
 Coefficients are raw radiance L_lm (Ramamoorthi and Hanrahan 2001, eq. 10), in the order of
 ``sh_lighting.core.sh.COEFFICIENT_NAMES`` (L00, L1-1, L10, L11, L2-2, ...), RGB per row, in
 Blender world axes. Errors are raised with the same messages the operators report.
+
+Besides computing, storing and applying coefficients, the API re-exports the preset functions
+(``export_preset``, ``import_preset``, ``shipped_presets``, ``user_presets``,
+``save_user_preset``, ``remove_user_preset``; formats in ``FORMATS``) and the lighting-design
+edits (``rotate``, ``match_mapping``, ``exposure``, ``saturation``, ``band_gains``,
+``flip_vertical``, ``apply_window``, ``split_sun``, ``describe``, ``negative_warning``).
 """
 
 import bpy
 
+from .blender.design import (  # lighting design: exact edits, windows, the sun split
+    DesignError,
+    apply_window,
+    band_gains,
+    describe,
+    exposure,
+    flip_vertical,
+    match_mapping,
+    negative_warning,
+    rotate,
+    saturation,
+    split_sun,
+)
+from .blender.preset_io import (  # presets and interop: JSON, three.js, glTF, Filament
+    FORMATS,
+    export_preset,
+    import_preset,
+    remove_user_preset,
+    save_user_preset,
+    shipped_presets,
+    user_presets,
+)
 from .blender import materials as _materials
 from .blender import nodes as _nodes
 from .blender import properties as _properties
 from .blender import scene_data as _scene_data
 from .blender import world as _world
 from .blender.preferences import ADDON_ID as _ADDON_ID
+from .core.presets import PresetError
 
 WorldError = _world.WorldError
 
@@ -99,3 +128,4 @@ def apply_to_materials(materials, scene=None):
 def remove_from_materials(materials):
     """Undo ``apply_to_materials`` on ``materials``; returns which were changed or skipped."""
     return _materials.remove_from_materials(list(materials))
+

@@ -1,0 +1,357 @@
+"""Lighting design on a scene's coefficients: plain functions for the operators and the API.
+
+Each function takes the scene (never ``bpy.context``), reads its coefficients
+(``scene_data.get_coefficients``: a LookupError when there are none), lets the core compute,
+and stores the result with ``properties.store_coefficients`` (edits are not new Reset
+values). Errors are ValueError/LookupError with a message for the user; nothing is changed
+then. Angles are in radians, like everywhere in Blender's Python API.
+
+The world-reading tools (Match Mapping, the window's error against the world, Split Sun) need
+the world's Environment Texture image: ``world_image`` reads it through ``world``'s own node
+tree interpretation, so they see exactly what Compute from World sees.
+"""
+
+from dataclasses import dataclass
+
+import bpy
+import numpy as np
+from mathutils import Matrix
+
+from ..core import edits, windowing
+from ..core.minimum import irradiance_minimum, negative_light_warning
+from ..core.rotation import rotate_coefficients
+from ..core.sun import detect_sun, remove_sun
+from ..core.world_map import (
+    map_coefficients,
+    map_irradiance,
+    mapping_rotation,
+    spread_normals,
+    sun_light_rotation,
+    to_world_direction,
+)
+from . import properties, scene_data, world
+from .images import image_pixels
+
+SUN_NAME = "SH Sun"
+SUN_MARKER = "sh_lighting_sun"  # custom property on the Sun object Split Sun made
+# Normals at which a window's error is measured against the world (brute force, eq. 1).
+COST_NORMALS = 256
+# Stored coefficients this close (relative to their largest) to the world's are "the world's".
+SAME_AS_WORLD = 1e-9
+
+WINDOWS = ("HANNING", "LANCZOS", "MINIMAL")
+DEFAULT_WIDTH = 3.0  # Hanning/Lanczos width L + 1 (core.windowing): (1, 3/4, 1/4) for Hanning
+BANDS = {"ALL": None, "AMBIENT": (0,), "DIRECTIONAL": (1,), "QUADRATIC": (2,), "COLOURED": (1, 2)}
+
+
+class DesignError(ValueError):
+    """A design tool cannot run on this scene; the message says why and what to do."""
+
+
+# -- the scene's coefficients ------------------------------------------------------------------
+
+
+def _edit(scene, function, *args, **kwargs):
+    coeffs = scene_data.get_coefficients(scene)
+    return properties.store_coefficients(scene, function(coeffs, *args, **kwargs))
+
+
+def rotate(scene, yaw=0.0, pitch=0.0, roll=0.0):
+    """Turn the lighting by yaw (about +Z), pitch (+X), roll (+Y), radians (``core.edits``)."""
+    return _edit(scene, edits.rotate, yaw, pitch, roll)
+
+
+def exposure(scene, stops):
+    """L' = 2^stops L. Returns the stored (9, 3) coefficients."""
+    return _edit(scene, edits.exposure, stops)
+
+
+def saturation(scene, amount, band=None):
+    """Blend each coefficient's RGB with its grey: 0 grey, 1 unchanged, > 1 more colourful.
+
+    ``band``: None (all), an int l, an iterable of l, or a key of ``BANDS``.
+    """
+    if isinstance(band, str):
+        if band not in BANDS:
+            raise DesignError(f"unknown band {band!r}: use one of {', '.join(BANDS)}")
+        band = BANDS[band]
+    elif isinstance(band, (int, np.integer)):
+        band = (int(band),)
+    return _edit(scene, edits.saturation, amount, band)
+
+
+def band_gains(scene, ambient=1.0, directional=1.0, quadratic=1.0):
+    """Scale band l = 0, 1, 2 by ``ambient``, ``directional``, ``quadratic``."""
+    return _edit(scene, edits.band_gains, ambient, directional, quadratic)
+
+
+def flip_vertical(scene):
+    """Mirror the lighting top to bottom: lit from below instead of above."""
+    return _edit(scene, edits.flip_vertical)
+
+
+def describe(scene):
+    """Nine short strings: what each coefficient does in the scene's lighting."""
+    return edits.describe_coefficients(scene_data.get_coefficients(scene))
+
+
+def negative_warning(scene):
+    """A sentence when the scene's 9-term irradiance goes below zero somewhere, else None."""
+    return negative_light_warning(scene_data.get_coefficients(scene))
+
+
+# -- the world's image -------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class WorldImage:
+    """The Environment Texture image of a world that Compute from World reads directly.
+
+    pixels: (H, W, 3 or 4) scene-linear radiance, rows top to bottom (None if not asked
+    for); projection: "EQUIRECTANGULAR" or "MIRROR_BALL"; strength: the Background's;
+    rotation: the Mapping node's XYZ Euler in radians, or None; image: the image's name.
+    """
+
+    world: str
+    image: str
+    projection: str
+    strength: float
+    rotation: tuple | None
+    pixels: np.ndarray | None
+
+
+def world_image(scene, read_pixels=True):
+    """The scene's world as an image plus Strength and Mapping rotation (``WorldImage``).
+
+    Raises ``world.WorldError`` for a broken world and DesignError when the world is not the
+    Environment Texture → Background chain that Compute from World reads directly (then it
+    is rendered by Cycles, and there is no image to work on).
+    """
+    # world.py's own reading of the node tree (its private helpers: it has no public function
+    # returning the image, Strength and rotation), so this sees what Compute from World sees.
+    output = world._check_world(scene.world, scene.name)
+    name = scene.world.name
+    world._check_images(scene.world, output)
+    try:
+        plan = world._image_plan(output)
+        pixels = None
+        if read_pixels:
+            pixels = world._linear_pixels(plan.image, image_pixels(plan.image))
+    except world._Unsupported as why:
+        raise DesignError(
+            f"world '{name}' is not an Environment Texture image read directly ({why}): this "
+            "tool needs World Output ← Background ← Environment Texture [← Mapping ← Texture "
+            "Coordinate]"
+        ) from None
+    except ValueError as error:  # image_pixels: no pixel data
+        raise world.WorldError(f"world '{name}': {error}") from None
+    return WorldImage(name, plan.image.name, plan.projection, plan.strength, plan.rotation,
+                      pixels)
+
+
+def _equirect(scene, what):
+    image = world_image(scene)
+    if image.projection != "EQUIRECTANGULAR":
+        raise DesignError(
+            f"{what} needs an equirectangular world image; image '{image.image}' of world "
+            f"'{image.world}' is a {image.projection.replace('_', ' ').lower()}"
+        )
+    return image
+
+
+def match_mapping(scene):
+    """Rotate the coefficients by the world's Mapping node rotation, as Blender renders it.
+
+    For coefficients computed from the image without the rotation (or from another world):
+    afterwards they are what Compute from World gives with it. DesignError when the world
+    has no Mapping rotation that SH Lighting reads.
+    """
+    coeffs = scene_data.get_coefficients(scene)
+    image = world_image(scene, read_pixels=False)
+    if image.rotation is None:
+        raise DesignError(
+            f"world '{image.world}' has no Mapping node between Texture Coordinate and its "
+            "Environment Texture: there is no rotation to match"
+        )
+    rotated = rotate_coefficients(coeffs, mapping_rotation(image.rotation))
+    return properties.store_coefficients(scene, rotated)
+
+
+# -- windows -----------------------------------------------------------------------------------
+
+
+LABELS = {"HANNING": "Hanning", "LANCZOS": "Lanczos", "MINIMAL": "Minimal"}
+
+
+@dataclass(frozen=True, eq=False)
+class WindowResult:
+    """What ``apply_window`` did.
+
+    kind, window (3,) w_0..w_2, coefficients (9, 3) stored, minimum (3,) exact min of the new
+    E(n) per channel. costs: {kind: ``core.windowing.WindowCost``} of every window (the one
+    applied and the others, for comparison, at the same width) against the world image's
+    brute-force irradiance, as fractions of its total light; empty, with ``note`` saying why,
+    when the coefficients are not those of an equirect world image.
+    """
+
+    kind: str
+    window: np.ndarray
+    coefficients: np.ndarray
+    minimum: np.ndarray
+    costs: dict
+    note: str
+
+    @property
+    def cost(self):
+        """The ``WindowCost`` of the window applied, or None."""
+        return self.costs.get(self.kind)
+
+    def report(self):
+        """One line for the user: the window and, when known, what each window costs."""
+        w = ", ".join(f"{v:.3g}" for v in self.window)
+        text = f"{LABELS[self.kind]} window ({w}) applied"
+        if not self.costs:
+            return f"{text}; {self.note}"
+        any_cost = next(iter(self.costs.values()))
+        parts = [f"none {_percent(any_cost.plain_mean, any_cost.plain_max)}"]
+        for kind, cost in self.costs.items():
+            mark = " (applied)" if kind == self.kind else ""
+            parts.append(f"{LABELS[kind]}{mark} {_percent(cost.windowed_mean, cost.windowed_max)}")
+        return f"{text}. Error vs the world image, mean / max % of its light: " + ", ".join(parts)
+
+
+def _percent(mean, largest):
+    return f"{100 * mean.max():.2f} / {100 * largest.max():.2f}"
+
+
+def window_for(kind, coeffs, width=DEFAULT_WIDTH):
+    """The band factors (3,) of window ``kind`` (``WINDOWS``) for ``coeffs``."""
+    if kind == "HANNING":
+        return windowing.hanning_window(width)
+    if kind == "LANCZOS":
+        return windowing.lanczos_window(width)
+    if kind == "MINIMAL":
+        return windowing.minimal_nonnegative_window(coeffs).window
+    raise DesignError(f"unknown window {kind!r}: use one of {', '.join(WINDOWS)}")
+
+
+def _world_costs(scene, coeffs, kind, window, width):
+    """({kind: WindowCost} of every window against the world image, ""), or ({}, why not)."""
+    try:
+        image = _equirect(scene, "the error against the world")
+    except DesignError:
+        return {}, "no error vs the world shown: it is not an equirectangular world image"
+    except ValueError as why:  # WorldError: no world, missing image, ...
+        return {}, f"no error vs the world shown: {why}"
+    # what Compute from World stores for this world (the same operations on the same pixels)
+    reference = map_coefficients(image.pixels, image.strength, image.rotation)
+    if np.abs(coeffs - reference).max() > SAME_AS_WORLD * np.abs(reference).max():
+        return {}, (
+            "no error vs the world shown: the coefficients are not the world's (edited since "
+            "Compute from World)"
+        )
+    normals = spread_normals(COST_NORMALS)
+    truth = map_irradiance(image.pixels, normals, image.strength, image.rotation)
+    costs = {}
+    for other in WINDOWS:
+        try:
+            w = window if other == kind else window_for(other, coeffs, width)
+        except ValueError:  # no minimal window (L00 ≤ 0): nothing to compare with
+            continue
+        costs[other] = windowing.window_cost(coeffs, w, normals, truth)
+    return costs, ""
+
+
+def apply_window(scene, kind, width=DEFAULT_WIDTH):
+    """Smooth the lighting with window ``kind`` ("HANNING", "LANCZOS" or "MINIMAL").
+
+    ``width``: of Hanning and Lanczos (ignored by MINIMAL, the least smoothing that makes E
+    non-negative everywhere). Returns a ``WindowResult``; when the coefficients are those of
+    an equirect world image, it holds the error each window costs against that image's
+    brute-force irradiance at ``COST_NORMALS`` normals.
+    """
+    coeffs = scene_data.get_coefficients(scene)
+    window = window_for(kind, coeffs, width)
+    costs, note = _world_costs(scene, coeffs, kind, window, width)
+    stored = properties.store_coefficients(scene, windowing.apply_window(coeffs, window))
+    return WindowResult(kind, window, stored, irradiance_minimum(stored).value, costs, note)
+
+
+# -- the sun -----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SunInfo:
+    """The Sun light ``split_sun`` made or updated.
+
+    light: the object's name; created: True if new. direction: (3,) unit vector toward the
+    sun, world axes; angle: angular diameter (radians); strength: W/m²; colour: (3,) linear
+    RGB, max 1 (strength · colour is the irradiance it gives a surface facing it);
+    power_fraction: its share of the world's light; coefficients: (9, 3) the rest, stored.
+    """
+
+    light: str
+    created: bool
+    direction: np.ndarray
+    angle: float
+    strength: float
+    colour: np.ndarray
+    power_fraction: float
+    coefficients: np.ndarray
+
+
+def find_sun_object(scene):
+    """The Sun light object in ``scene`` that Split Sun made (marked ``SUN_MARKER``), or None."""
+    for obj in scene.objects:
+        if obj.get(SUN_MARKER) and obj.type == "LIGHT":
+            return obj
+    return None
+
+
+def _sun_object(scene):
+    """(object, created): ours if the scene has it, else a new one in the scene collection."""
+    obj = find_sun_object(scene)
+    if obj is not None:
+        obj.data.type = "SUN"
+        return obj, False
+    light = bpy.data.lights.new(SUN_NAME, type="SUN")
+    obj = bpy.data.objects.new(SUN_NAME, light)
+    obj[SUN_MARKER] = True
+    obj.id_properties_ui(SUN_MARKER).update(
+        description="Made by SH Lighting's Split Sun, which updates this light on every split"
+    )
+    scene.collection.objects.link(obj)
+    return obj, True
+
+
+def split_sun(scene):
+    """Take the world image's sun out as a Blender Sun light; the coefficients get the rest.
+
+    Detects the dominant small bright source (``core.sun.detect_sun``); returns None, changing
+    nothing, when there is none. Otherwise creates (or updates) the Sun object "SH Sun",
+    aimed so that it shines from the sun's direction in the world (Mapping rotation applied),
+    with its angular diameter, colour and a strength giving exactly the irradiance of the
+    texels taken out (× the Background's Strength), and stores the coefficients of the
+    world without them. Returns a ``SunInfo``.
+    """
+    image = _equirect(scene, "Split Sun")
+    if not image.strength > 0.0:
+        return None  # a black (or negative) world has no sun to split off
+    sun = detect_sun(image.pixels)
+    if sun is None:
+        return None
+    rest = map_coefficients(remove_sun(image.pixels, sun), image.strength, image.rotation)
+    direction = to_world_direction(sun.direction, image.rotation)
+    strength = sun.strength * image.strength
+    scene_data.check_coefficients_9x3(rest)  # fail before anything changes
+
+    obj, created = _sun_object(scene)
+    light = obj.data
+    light.energy = strength
+    light.color = tuple(float(v) for v in sun.colour)
+    light.angle = sun.angular_diameter
+    obj.rotation_mode = "XYZ"
+    obj.rotation_euler = Matrix(sun_light_rotation(direction).tolist()).to_euler("XYZ")
+    stored = properties.store_coefficients(scene, rest)
+    return SunInfo(obj.name, created, direction, sun.angular_diameter, strength,
+                   np.array(sun.colour), sun.power_fraction, stored)

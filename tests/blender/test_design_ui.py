@@ -1,0 +1,675 @@
+"""Lighting design tools (design.py, design_ui.py, previews.py) in background mode.
+
+Every edit must store exactly what the core computes from the stored coefficients, through
+the operator (``bpy.ops``, undoable) and through ``design``. Worlds are small float EXRs:
+a constant sky over a constant ground, optionally with a small bright disc (the sun), whose
+split can be predicted texel by texel.
+"""
+
+import math
+import textwrap
+
+import bpy
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose, assert_array_equal
+
+import sh_lighting
+from sh_lighting.blender import compat, design, design_ui, previews, properties, scene_data
+from sh_lighting.blender.images import image_pixels
+from sh_lighting.blender.world import world_coefficients
+from sh_lighting.core import edits, windowing
+from sh_lighting.core.equirect import texel_directions, texel_solid_angles
+from sh_lighting.core.irradiance import reference_irradiance
+from sh_lighting.core.minimum import irradiance_minimum, mean_irradiance, negative_light_warning
+from sh_lighting.core.preview import basis_sphere_images, irradiance_sphere_image
+from sh_lighting.core.projection import project_equirect
+from sh_lighting.core.rotation import euler_xyz_matrix, rotate_coefficients
+from sh_lighting.core.sh import sh_basis
+from sh_lighting.core.world_map import spread_normals
+
+pytestmark = pytest.mark.blender
+
+# Signed, L00 > 0, E(n) < 0 somewhere (so every window changes something).
+KNOWN = np.array(
+    [
+        [1.2, 1.0, 0.8],
+        [0.3, -0.2, 0.1],
+        [0.6, 0.5, 0.7],
+        [-0.4, 0.2, 0.3],
+        [0.1, -0.3, 0.2],
+        [-0.2, 0.1, 0.25],
+        [0.3, 0.2, -0.1],
+        [0.05, -0.15, 0.1],
+        [-0.1, 0.2, 0.3],
+    ]
+)
+H, W = 64, 128  # world maps: texels of 2.8°
+SKY = np.array([0.6, 0.7, 0.9])
+GROUND = np.array([0.25, 0.2, 0.15])
+SUN_RGB = np.array([1.0, 0.85, 0.6])
+SUN_RADIANCE = 2000.0
+SUN_IMAGE_DIRECTION = np.array([0.5, -0.4, 0.6]) / np.linalg.norm([0.5, -0.4, 0.6])
+SUN_RADIUS = np.radians(4.0)
+EULER = (0.3, -0.2, 1.1)
+STRENGTH = 1.5
+# The maps are float32 EXRs read back exactly; what is derived from them is float32 rounding
+# away from a float64 prediction; Blender stores light values as float32.
+FLOAT32 = 2e-6
+# Preview pixels are stored as bytes: core's values to within half a step of 1/255.
+BYTE = 0.5 / 255 + 1e-6
+
+
+# -- worlds ------------------------------------------------------------------------------------
+
+
+def write_exr(path, pixels):
+    """Top-to-bottom float ``pixels`` (H, W, 3 or 4) → a lossless 32-bit RGBA OpenEXR."""
+    height, width = pixels.shape[:2]
+    rgba = np.ones((height, width, 4), dtype=np.float32)
+    rgba[..., :3] = pixels[..., :3]
+    image = bpy.data.images.new("tmp", width, height, float_buffer=True, alpha=True)
+    image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())
+    scene = bpy.data.scenes.new("tmp")
+    settings = scene.render.image_settings
+    settings.file_format, settings.color_mode, settings.color_depth = "OPEN_EXR", "RGBA", "32"
+    image.save_render(str(path), scene=scene)
+    bpy.data.scenes.remove(scene)
+    bpy.data.images.remove(image)
+    return str(path)
+
+
+def environment_world(scene, path, strength=1.0, rotation=None):
+    """[Texture Coordinate → Mapping →] Environment Texture → Background → World Output."""
+    world = bpy.data.worlds.new("Design")
+    tree = compat.ensure_node_tree(world)
+    background = tree.nodes["Background"]
+    background.inputs["Strength"].default_value = strength
+    texture = tree.nodes.new("ShaderNodeTexEnvironment")
+    texture.image = bpy.data.images.load(path)
+    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
+    if rotation is not None:
+        add_mapping(world, rotation)
+    scene.world = world
+    return world
+
+
+def add_mapping(world, rotation):
+    tree = world.node_tree
+    texture = next(n for n in tree.nodes if n.type == "TEX_ENVIRONMENT")
+    coordinates = tree.nodes.new("ShaderNodeTexCoord")
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    mapping.inputs["Rotation"].default_value = rotation
+    tree.links.new(coordinates.outputs["Generated"], mapping.inputs["Vector"])
+    tree.links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
+
+
+def sky_map(height=H, width=W):
+    """Constant sky over constant ground: the ring around the sun is all sky, so the texels
+    Split Sun takes out get exactly the sky's value back."""
+    d = texel_directions(height, width)
+    return np.where(d[..., 2:] > 0.0, SKY, GROUND).astype(np.float32)
+
+
+def disc_mask(height=H, width=W):
+    return texel_directions(height, width) @ SUN_IMAGE_DIRECTION > math.cos(SUN_RADIUS)
+
+
+def sunny_map(sky=None):
+    """``sky_map`` plus a disc of SUN_RADIANCE · SUN_RGB: (pixels float32, disc mask)."""
+    sky = sky_map() if sky is None else sky
+    disc = disc_mask()
+    return (sky + disc[..., None] * SUN_RADIANCE * SUN_RGB).astype(np.float32), disc
+
+
+def solid_angles(mask):
+    return np.broadcast_to(texel_solid_angles(*mask.shape)[:, None], mask.shape)[mask]
+
+
+class Recorder:
+    """Stands in for the operator instance when calling ``execute`` directly: keeps reports."""
+
+    def __init__(self, **props):
+        self.reports = []
+        self.__dict__.update(props)
+
+    def report(self, kind, message):
+        self.reports.append((set(kind), message))
+
+
+def run_execute(cls, **props):
+    recorder = Recorder(**props)
+    recorder.apply = lambda scene: cls.apply(recorder, scene)
+    return cls.execute(recorder, bpy.context), recorder.reports
+
+
+def stored():
+    return scene_data.get_coefficients(bpy.context.scene)
+
+
+# -- edits: operator = design function = core on the stored coefficients -----------------------
+
+# Operator properties are float32: the values here are exact in float32, so the operator and
+# the float64 calls compute on the same numbers.
+EDITS = [
+    ("rotate", {"yaw": 0.75, "pitch": -0.375, "roll": 1.875},
+     lambda c: edits.rotate(c, 0.75, -0.375, 1.875),
+     lambda s: design.rotate(s, 0.75, -0.375, 1.875)),
+    ("exposure", {"stops": -1.5}, lambda c: edits.exposure(c, -1.5),
+     lambda s: design.exposure(s, -1.5)),
+    ("saturation", {"amount": 0.25}, lambda c: edits.saturation(c, 0.25),
+     lambda s: design.saturation(s, 0.25)),
+    ("saturation", {"amount": 1.625, "band": "DIRECTIONAL"},
+     lambda c: edits.saturation(c, 1.625, (1,)), lambda s: design.saturation(s, 1.625, 1)),
+    ("saturation", {"amount": 0.0, "band": "COLOURED"},
+     lambda c: edits.saturation(c, 0.0, (1, 2)), lambda s: design.saturation(s, 0.0, (1, 2))),
+    ("band_gains", {"ambient": 1.25, "directional": 0.375, "quadratic": 2.0},
+     lambda c: edits.band_gains(c, 1.25, 0.375, 2.0),
+     lambda s: design.band_gains(s, 1.25, 0.375, 2.0)),
+    ("flip_vertical", {}, edits.flip_vertical, design.flip_vertical),
+    ("window", {"kind": "HANNING", "width": 2.5},
+     lambda c: windowing.apply_window(c, windowing.hanning_window(2.5)),
+     lambda s: design.apply_window(s, "HANNING", 2.5).coefficients),
+    ("window", {"kind": "LANCZOS"},
+     lambda c: windowing.apply_window(c, windowing.lanczos_window(3.0)),
+     lambda s: design.apply_window(s, "LANCZOS").coefficients),
+    ("window", {"kind": "MINIMAL"},
+     lambda c: windowing.minimal_nonnegative_window(c).coefficients,
+     lambda s: design.apply_window(s, "MINIMAL").coefficients),
+]
+
+
+@pytest.mark.parametrize(("op", "props", "core", "function"), EDITS,
+                         ids=[f"{e[0]}-{i}" for i, e in enumerate(EDITS)])
+def test_edit_operator_and_function_store_cores_result_and_undo(addon, op, props, core,
+                                                                function):
+    scene = bpy.context.scene
+    properties.store_coefficients(scene, KNOWN, computed=True)
+    expected = core(KNOWN)
+    assert np.abs(expected - KNOWN).max() > 1e-3  # the edit changes something
+    bpy.ops.ed.undo_push(message="before edit")
+    # 'EXEC_DEFAULT', True: push an undo step as a button click does.
+    assert getattr(bpy.ops.shlight, op)("EXEC_DEFAULT", True, **props) == {"FINISHED"}
+    assert_array_equal(stored(), expected)
+    assert_array_equal(scene_data.get_computed(bpy.context.scene), KNOWN)  # not a new Reset
+
+    bpy.ops.ed.undo()
+    assert_array_equal(stored(), KNOWN)
+
+    scene = bpy.context.scene  # undo reloads the data
+    returned = function(scene)
+    assert_array_equal(stored(), expected)
+    if not isinstance(returned, np.ndarray):
+        returned = stored()
+    assert_array_equal(returned, expected)
+
+
+OPERATORS = [c for c in design_ui.classes if issubclass(c, bpy.types.Operator)]
+
+
+@pytest.mark.parametrize("cls", OPERATORS, ids=lambda c: c.__name__)
+def test_design_operators_are_undoable_and_described(addon, cls):
+    assert {"REGISTER", "UNDO"} <= cls.bl_options
+    assert cls.__doc__
+    op = getattr(bpy.ops.shlight, cls.bl_idname.split(".")[1])
+    assert "UNDO" in op.bl_options
+    for prop in op.get_rna_type().properties:
+        if prop.identifier != "rna_type":
+            assert prop.description, f"{cls.__name__}.{prop.identifier}"
+
+
+def test_rotate_angles_are_yaw_pitch_roll_in_radians(addon):
+    """A light from +X, yawed by 90°, comes from +Y (core.edits' convention, Blender's units)."""
+    scene = bpy.context.scene
+    from_x = np.repeat(sh_basis(np.array([1.0, 0.0, 0.0]))[:, None], 3, axis=1)
+    from_y = np.repeat(sh_basis(np.array([0.0, 1.0, 0.0]))[:, None], 3, axis=1)
+    properties.store_coefficients(scene, from_x)
+    bpy.ops.shlight.rotate(yaw=math.pi / 2)
+    assert_allclose(stored(), from_y, atol=1e-7)  # π/2 as a float32 property
+    rna = bpy.ops.shlight.rotate.get_rna_type().properties["yaw"]
+    assert rna.subtype == "ANGLE"  # shown in degrees
+
+
+@pytest.mark.parametrize(
+    "op", ["rotate", "exposure", "saturation", "band_gains", "flip_vertical", "window"]
+)
+def test_edits_are_disabled_without_coefficients(addon, op):
+    with pytest.raises(RuntimeError, match=design_ui.NO_COEFFICIENTS):
+        getattr(bpy.ops.shlight, op)()
+    assert not scene_data.has_coefficients(bpy.context.scene)
+
+
+def test_split_sun_is_disabled_without_a_world(addon):
+    bpy.context.scene.world = None
+    with pytest.raises(RuntimeError, match="has no world"):
+        bpy.ops.shlight.split_sun()
+
+
+def test_describe_and_warning_are_cores(addon):
+    scene = bpy.context.scene
+    properties.store_coefficients(scene, KNOWN)
+    assert design.describe(scene) == edits.describe_coefficients(KNOWN)
+    assert design.negative_warning(scene) == negative_light_warning(KNOWN)
+    assert design.negative_warning(scene) is not None
+    properties.store_coefficients(scene, windowing.minimal_nonnegative_window(KNOWN).coefficients)
+    assert design.negative_warning(scene) is None
+
+
+# -- Match Mapping -----------------------------------------------------------------------------
+
+
+def test_match_mapping_equals_computing_with_the_mapping(addon, tmp_path):
+    scene = bpy.context.scene
+    pixels, _ = sunny_map()
+    world = environment_world(scene, write_exr(tmp_path / "w.exr", pixels), STRENGTH)
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+    plain = stored()
+    add_mapping(world, EULER)
+    with_mapping, info = world_coefficients(scene)
+    assert info.source == "image" and info.rotation == pytest.approx(EULER)
+    assert np.abs(with_mapping - plain).max() > 0.1 * np.abs(plain).max()  # it does rotate
+
+    bpy.ops.ed.undo_push(message="before match")
+    assert bpy.ops.shlight.rotate("EXEC_DEFAULT", True, mode="MAPPING") == {"FINISHED"}
+    assert_allclose(stored(), with_mapping, rtol=0, atol=1e-12 * np.abs(plain).max())
+    bpy.ops.ed.undo()
+    assert_array_equal(stored(), plain)
+    assert_allclose(design.match_mapping(bpy.context.scene), with_mapping, rtol=0,
+                    atol=1e-12 * np.abs(plain).max())
+
+
+def test_match_mapping_without_a_mapping_node_changes_nothing(addon, tmp_path):
+    scene = bpy.context.scene
+    environment_world(scene, write_exr(tmp_path / "w.exr", sky_map()))
+    properties.store_coefficients(scene, KNOWN)
+    with pytest.raises(RuntimeError, match="no Mapping node"):
+        bpy.ops.shlight.rotate(mode="MAPPING")
+    with pytest.raises(design.DesignError, match="no Mapping node"):
+        design.match_mapping(scene)
+    scene.world = None
+    with pytest.raises(RuntimeError, match="has no world"):
+        bpy.ops.shlight.rotate(mode="MAPPING")
+    assert_array_equal(stored(), KNOWN)
+
+
+# -- windows -----------------------------------------------------------------------------------
+
+
+def test_minimal_window_makes_a_single_sun_world_non_negative_and_reports_costs(addon, tmp_path):
+    scene = bpy.context.scene
+    dim = np.full((H, W, 3), 0.002, dtype=np.float32)  # one bright source, almost no sky
+    pixels, _ = sunny_map(dim)
+    environment_world(scene, write_exr(tmp_path / "w.exr", pixels), STRENGTH, EULER)
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+    before = stored()
+    mean = mean_irradiance(before)
+    assert (irradiance_minimum(before).value < -0.1 * mean).all()  # rings far below zero
+
+    result, reports = run_execute(design_ui.SHLIGHT_OT_window, kind="MINIMAL", width=3.0)
+    assert result == {"FINISHED"}
+    minimal = windowing.minimal_nonnegative_window(before)
+    assert_array_equal(stored(), minimal.coefficients)
+    assert (irradiance_minimum(stored()).bound >= -1e-12 * mean).all()
+    assert design.negative_warning(scene) is None
+
+    # the costs of every window, from the world's pixels (rotated, scaled) at the same normals
+    normals = spread_normals(design.COST_NORMALS)
+    truth = reference_irradiance(pixels, normals @ euler_xyz_matrix(EULER).T) * STRENGTH
+    windows = {"HANNING": windowing.hanning_window(3.0), "LANCZOS": windowing.lanczos_window(3.0),
+               "MINIMAL": minimal.window}
+    costs = {k: windowing.window_cost(before, w, normals, truth) for k, w in windows.items()}
+
+    def percent(mean, largest):
+        return f"{100 * mean.max():.2f} / {100 * largest.max():.2f}"
+
+    c = costs["MINIMAL"]
+    expected = (
+        f"mean / max % of its light: none {percent(c.plain_mean, c.plain_max)}, "
+        f"Hanning {percent(costs['HANNING'].windowed_mean, costs['HANNING'].windowed_max)}, "
+        f"Lanczos {percent(costs['LANCZOS'].windowed_mean, costs['LANCZOS'].windowed_max)}, "
+        f"Minimal (applied) {percent(c.windowed_mean, c.windowed_max)}"
+    )
+    [(kind, message)] = reports
+    assert kind == {"INFO"}
+    assert message.startswith("Minimal window (1, ")
+    assert message.endswith(expected), message
+    # the plain 9 terms of one small source: mean error near 3 % of its power (REFERENCE.md §2)
+    assert 0.02 < c.plain_mean.max() < 0.035
+
+    # edited coefficients are not the world's: no costs, and the report says why
+    result = design.apply_window(scene, "HANNING")
+    assert result.cost is None and not result.costs
+    assert "not the world's" in result.report()
+
+
+def plain_colour_world(scene):
+    scene.world = bpy.data.worlds.new("Plain")
+    compat.ensure_node_tree(scene.world)
+
+
+def test_window_cost_needs_an_image_world(addon):
+    scene = bpy.context.scene
+    plain_colour_world(scene)
+    properties.store_coefficients(scene, KNOWN)
+    result = design.apply_window(scene, "LANCZOS", 2.0)
+    assert result.cost is None
+    assert "not an equirectangular world image" in result.report()
+    assert_array_equal(result.window, windowing.lanczos_window(2.0))
+
+
+# -- Split Sun ---------------------------------------------------------------------------------
+
+
+def sun_objects():
+    return [o for o in bpy.context.scene.objects if o.get(design.SUN_MARKER)]
+
+
+def minus_z(obj):
+    """The direction the light shines along: its object's −Z axis in world axes."""
+    bpy.context.view_layer.update()
+    return -np.array(obj.matrix_world.col[2][:3])
+
+
+def disc_direction(disc):
+    """The disc's mean direction (its texels weighted by solid angle), in the image."""
+    d = texel_directions(*disc.shape)[disc]
+    mean = solid_angles(disc) @ d
+    return mean / np.linalg.norm(mean)
+
+
+def test_split_sun_creates_one_sun_light_and_the_rest_as_coefficients(addon, tmp_path):
+    scene = bpy.context.scene
+    sky = sky_map()
+    pixels, disc = sunny_map(sky)
+    environment_world(scene, write_exr(tmp_path / "sun.exr", pixels), STRENGTH, EULER)
+    bpy.ops.ed.undo_push(message="before split")
+    assert bpy.ops.shlight.split_sun("EXEC_DEFAULT", True) == {"FINISHED"}
+
+    [obj] = sun_objects()
+    assert obj.name == design.SUN_NAME and obj.type == "LIGHT" and obj.data.type == "SUN"
+    assert obj.name in scene.collection.objects
+    lookup = euler_xyz_matrix(EULER)
+    assert np.degrees(np.arccos(disc_direction(disc) @ SUN_IMAGE_DIRECTION)) < 0.5
+    s = lookup.T @ disc_direction(disc)  # where the world shows the image's sun
+    # the light shines along its −Z: from the sun toward the scene
+    assert_allclose(minus_z(obj), -s, atol=1e-6)
+    omega = solid_angles(disc).sum()
+    assert obj.data.angle == pytest.approx(2.0 * math.acos(1.0 - omega / (2.0 * math.pi)),
+                                           rel=FLOAT32)
+    # irradiance it adds = what was taken out: the disc's excess over the sky, × Strength
+    removed = STRENGTH * SUN_RADIANCE * SUN_RGB * omega
+    assert_allclose(obj.data.energy * np.array(obj.data.color), removed, rtol=FLOAT32)
+    assert max(obj.data.color) == pytest.approx(1.0)
+    # the coefficients: the world without the disc, as Blender shows it
+    rest = rotate_coefficients(project_equirect(sky) * STRENGTH, lookup.T)
+    assert_allclose(stored(), rest, rtol=0, atol=1e-5 * np.abs(rest).max())
+    assert scene_data.COMPUTED_PROPERTY not in scene  # not new Reset values
+
+    bpy.ops.ed.undo()
+    assert not sun_objects()
+    assert not scene_data.has_coefficients(bpy.context.scene)
+
+
+def test_a_second_split_updates_the_same_light(addon, tmp_path):
+    scene = bpy.context.scene
+    pixels, _ = sunny_map()
+    environment_world(scene, write_exr(tmp_path / "sun.exr", pixels), STRENGTH)
+    first = design.split_sun(scene)
+    assert first.created
+    [obj] = sun_objects()
+    bpy.context.view_layer.update()
+    energy, matrix = obj.data.energy, np.array(obj.matrix_world)
+    obj.data.energy = 1.0
+    obj.rotation_euler = (0.0, 0.0, 0.0)
+    properties.store_coefficients(scene, KNOWN)
+
+    result, reports = run_execute(design_ui.SHLIGHT_OT_split_sun)
+    assert result == {"FINISHED"}
+    assert [o.name for o in sun_objects()] == [obj.name]
+    assert len(bpy.data.lights) == 1 and len(bpy.data.objects) == 1
+    assert obj.data.energy == pytest.approx(energy, rel=FLOAT32)
+    bpy.context.view_layer.update()
+    assert_allclose(np.array(obj.matrix_world), matrix, atol=1e-6)
+    assert_array_equal(stored(), first.coefficients)
+    [(kind, message)] = reports
+    assert kind == {"INFO"} and f"'{obj.name}' updated" in message
+
+
+def test_split_sun_on_a_world_without_a_sun_changes_nothing(addon, tmp_path):
+    scene = bpy.context.scene
+    environment_world(scene, write_exr(tmp_path / "sky.exr", sky_map()), STRENGTH)
+    properties.store_coefficients(scene, KNOWN)
+    objects = len(bpy.data.objects)
+    result, reports = run_execute(design_ui.SHLIGHT_OT_split_sun)
+    assert result == {"FINISHED"}
+    assert reports == [({"INFO"}, "No sun found in the world image: nothing changed")]
+    assert bpy.ops.shlight.split_sun() == {"FINISHED"}
+    assert design.split_sun(scene) is None
+    assert_array_equal(stored(), KNOWN)
+    assert len(bpy.data.objects) == objects and not bpy.data.lights
+
+
+def test_split_sun_needs_an_image_world(addon):
+    plain_colour_world(bpy.context.scene)
+    with pytest.raises(RuntimeError, match="not an Environment Texture image"):
+        bpy.ops.shlight.split_sun()
+    assert not bpy.data.lights
+
+
+# Three planes tilted 30° toward azimuths 0°, 120°, 240°: their normals span 3-D, so their
+# brightness pins down the sun's direction, not only its elevation.
+TILT = math.radians(30.0)
+AZIMUTHS = np.radians([0.0, 120.0, 240.0])
+PLANE_SPACING = 1.2  # along X; camera pixels of 0.12
+PLANE_HALF_SIZE = 0.4
+# Cycles, 16 samples of a small sun, direct light only: measured within 5e-4 of the prediction;
+# a 1° error in the sun's direction changes the planes' brightness by 1 % to 3 %.
+RENDER_TOLERANCE = 2e-3
+
+
+def tilted_plane(index, material):
+    """A square centred at x = (index − 1) · PLANE_SPACING with unit normal n; returns n."""
+    a = AZIMUTHS[index]
+    n = np.array([math.sin(TILT) * math.cos(a), math.sin(TILT) * math.sin(a), math.cos(TILT)])
+    e1 = np.array([-math.sin(a), math.cos(a), 0.0])
+    e2 = np.cross(n, e1)  # e1 × e2 = n: counter-clockwise seen from the normal's side
+    c = np.array([(index - 1) * PLANE_SPACING, 0.0, 0.0])
+    h = PLANE_HALF_SIZE
+    corners = [c - h * e1 - h * e2, c + h * e1 - h * e2, c + h * e1 + h * e2, c - h * e1 + h * e2]
+    mesh = bpy.data.meshes.new(f"Plane{index}")
+    mesh.from_pydata([tuple(v) for v in corners], [], [(0, 1, 2, 3)])
+    mesh.materials.append(material)
+    bpy.context.scene.collection.objects.link(bpy.data.objects.new(mesh.name, mesh))
+    return n
+
+
+def white_diffuse():
+    material = bpy.data.materials.new("White")
+    tree = compat.ensure_node_tree(material)
+    tree.nodes.clear()
+    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(diffuse.outputs["BSDF"], output.inputs["Surface"])
+    return material
+
+
+def test_cycles_renders_the_split_sun_where_it_was(addon, tmp_path):
+    """White diffuse planes lit only by the created Sun show S·C·max(n·s, 0)/π (albedo 1)."""
+    scene = bpy.context.scene
+    pixels, _ = sunny_map()
+    environment_world(scene, write_exr(tmp_path / "sun.exr", pixels), STRENGTH, EULER)
+    info = design.split_sun(scene)
+    [sun] = sun_objects()
+
+    black = bpy.data.worlds.new("Black")
+    background = compat.ensure_node_tree(black).nodes["Background"]
+    background.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    background.inputs["Strength"].default_value = 0.0
+    scene.world = black
+    material = white_diffuse()
+    normals = np.array([tilted_plane(i, material) for i in range(3)])
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    camera.data.type, camera.data.ortho_scale = "ORTHO", 3.0 * PLANE_SPACING
+    camera.location = (0.0, 0.0, 3.0)  # looking down −Z, image X = world X
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+
+    scene.render.engine = "CYCLES"
+    scene.cycles.device, scene.cycles.samples = "CPU", 16
+    scene.cycles.use_adaptive_sampling = scene.cycles.use_denoising = False
+    scene.cycles.max_bounces = 0  # direct light only: the planes see each other
+    scene.render.resolution_x, scene.render.resolution_y = 30, 10
+    scene.render.resolution_percentage = 100
+    scene.render.dither_intensity = 0.0
+    scene.view_settings.view_transform, scene.view_settings.look = "Standard", "None"
+    settings = scene.render.image_settings
+    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
+    scene.render.filepath = str(tmp_path / "render.exr")
+    bpy.ops.render.render(write_still=True)
+    rendered = image_pixels(bpy.data.images.load(str(tmp_path / "render.exr")))[..., :3]
+
+    cosines = normals @ info.direction
+    assert (cosines > 0.2).all()  # every plane faces the sun
+    per_cosine = sun.data.energy * np.array(sun.data.color) / math.pi
+    for index, cosine in enumerate(cosines):
+        centre = rendered[4:6, 10 * index + 4 : 10 * index + 6].reshape(-1, 3).mean(axis=0)
+        assert_allclose(centre, per_cosine * cosine, rtol=RENDER_TOLERANCE)
+
+
+# -- previews ----------------------------------------------------------------------------------
+
+
+def test_previews_hold_cores_images_and_follow_edits(addon, monkeypatch):
+    scene = bpy.context.scene
+    basis = previews.basis()
+    assert len(basis) == 9
+    expected = basis_sphere_images(previews.BASIS_SIZE)
+    for preview, image in zip(basis, expected, strict=True):
+        assert tuple(preview.image_size) == (previews.BASIS_SIZE, previews.BASIS_SIZE)
+        assert_allclose(previews.from_preview(preview), image, rtol=0, atol=BYTE)
+
+    properties.store_coefficients(scene, KNOWN)
+    scene.view_settings.exposure = -1.0
+    calls = []
+    original = previews.irradiance_sphere_image
+    monkeypatch.setattr(previews, "irradiance_sphere_image",
+                        lambda *a, **k: calls.append(a) or original(*a, **k))
+    design_ui.draw_design(RecordingLayout([]), bpy.context)
+    preview = previews.collection()[previews.IRRADIANCE_NAME]
+    assert tuple(preview.image_size) == (previews.IRRADIANCE_SIZE, previews.IRRADIANCE_SIZE)
+    image = irradiance_sphere_image(KNOWN, previews.IRRADIANCE_SIZE, -1.0, show_negative=True)
+    assert_allclose(previews.from_preview(preview), image, rtol=0, atol=BYTE)
+    design_ui.draw_design(RecordingLayout([]), bpy.context)
+    assert len(calls) == 1  # same coefficients: not recomputed
+
+    bpy.ops.shlight.exposure(stops=2.0)
+    design_ui.draw_design(RecordingLayout([]), bpy.context)
+    assert len(calls) == 2
+    image = irradiance_sphere_image(stored(), previews.IRRADIANCE_SIZE, -1.0, show_negative=True)
+    assert_allclose(previews.from_preview(preview), image, rtol=0, atol=BYTE)
+    assert np.abs(previews.from_preview(preview) - image).max() <= BYTE
+
+
+def test_previews_collection_is_removed_on_unregister_without_leaks():
+    open_before = set(bpy.utils.previews._uuid_open)
+    for _ in range(20):
+        sh_lighting.register()
+        pcoll = previews.collection()
+        assert len(pcoll) == 9
+        sh_lighting.unregister()
+        assert len(pcoll) == 0  # cleared by bpy.utils.previews.remove
+        with pytest.raises(RuntimeError, match="not registered"):
+            previews.collection()
+    assert set(bpy.utils.previews._uuid_open) == open_before
+
+
+# -- the Design sub-panel ----------------------------------------------------------------------
+
+
+class Operator:
+    """What ``layout.operator`` returns: takes the properties the panel sets."""
+
+
+class RecordingLayout:
+    """Stands in for UILayout (no UI headless): records what is drawn, returns itself."""
+
+    def __init__(self, calls):
+        self.calls = calls
+        self.use_property_split = False
+        self.use_property_decorate = True
+        self.active = True
+        self.alignment = "EXPAND"
+
+    def _child(self, *args, **kwargs):
+        return RecordingLayout(self.calls)
+
+    column = row = box = split = _child
+
+    def prop(self, data, path, **kwargs):
+        self.calls.append(("prop", data, path, kwargs))
+
+    def operator(self, idname, **kwargs):
+        props = Operator()
+        self.calls.append(("operator", idname, props))
+        return props
+
+    def label(self, text="", icon="NONE"):
+        self.calls.append(("label", text, icon))
+
+    def template_icon(self, icon_value=0, scale=1.0):
+        self.calls.append(("icon", icon_value, scale))
+
+
+def draw(context):
+    calls = []
+    design_ui.draw_design(RecordingLayout(calls), context)
+    return calls
+
+
+def test_design_panels_are_under_both_main_panels(addon):
+    assert bpy.types.SHLIGHT_PT_world_design.bl_parent_id == "SHLIGHT_PT_world"
+    assert bpy.types.SHLIGHT_PT_view3d_design.bl_parent_id == "SHLIGHT_PT_view3d"
+    for cls in (design_ui.SHLIGHT_PT_world_design, design_ui.SHLIGHT_PT_view3d_design):
+        assert cls.bl_label == "Design" and cls.draw is design_ui._DesignPanel.draw
+
+
+def test_design_panel_draws_previews_warning_words_and_buttons(addon):
+    scene = bpy.context.scene
+    calls = draw(bpy.context)
+    icons = [c for c in calls if c[0] == "icon"]
+    assert len(icons) == 9  # the basis only
+    assert (design_ui.NO_COEFFICIENTS, "INFO") in [c[1:] for c in calls if c[0] == "label"]
+
+    properties.store_coefficients(scene, KNOWN)  # E < 0 behind its main light
+    calls = draw(bpy.context)
+    icons = [c for c in calls if c[0] == "icon"]
+    assert [c[1] for c in icons[:9]] == [p.icon_id for p in previews.basis()]
+    assert icons[9][1] == previews.collection()[previews.IRRADIANCE_NAME].icon_id
+    assert len(icons) == 10
+    labels = [c for c in calls if c[0] == "label"]
+    errors = [i for i, c in enumerate(labels) if c[2] == "ERROR"]
+    assert len(errors) == 1
+    warning = negative_light_warning(KNOWN)
+    wrapped = textwrap.wrap(warning, design_ui.WARNING_WIDTH)
+    assert [c[1] for c in labels[errors[0]: errors[0] + len(wrapped)]] == wrapped
+    words = [c[1] for c in labels]
+    for line in edits.describe_coefficients(KNOWN):
+        assert line in words
+
+    ops = [(c[1], dict(vars(c[2]))) for c in calls if c[0] == "operator"]
+    idnames = {name for name, _ in ops}
+    assert idnames == {f"shlight.{cls.bl_idname.split('.')[1]}" for cls in design_ui.classes
+                       if hasattr(cls, "bl_idname") and cls.bl_idname.startswith("shlight.")}
+    assert ("shlight.rotate", {"mode": "MAPPING"}) in ops
+    assert ("shlight.exposure", {"stops": -1.0}) in ops
+    assert {p.get("kind") for name, p in ops if name == "shlight.window"} == set(design.WINDOWS)
+    for name, props in ops:  # every button's operator and settings exist
+        op = getattr(bpy.ops.shlight, name.split(".")[1])
+        rna = op.get_rna_type().properties
+        for key in props:
+            assert key in rna
+
+    properties.store_coefficients(scene, windowing.minimal_nonnegative_window(KNOWN).coefficients)
+    labels = [c for c in draw(bpy.context) if c[0] == "label"]
+    assert not [c for c in labels if c[2] == "ERROR"]
