@@ -36,6 +36,7 @@ $(BENCH_STAMP): $(STAMP) requirements-bench.txt
 
 bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_prefilter
+	$(PY) -m benchmarks.report
 
 package: $(STAMP)
 	$(PY) -m tools.package dist
