@@ -51,15 +51,14 @@ removed and the destination is untouched. An existing file is only replaced with
 
 import json
 import math
-import os
 import re
-import secrets
 from datetime import date, datetime
 from numbers import Real
 from pathlib import Path
 
 import numpy as np
 
+from .atomic import write_text_atomic
 from .sh import COEFFICIENT_NAMES
 
 FORMAT_NAME = "sh_lighting.preset"
@@ -373,47 +372,11 @@ def read_preset(path):
 
 
 def write_preset(path, coeffs, metadata=None, overwrite=False):
-    """Write a preset file atomically; returns the path written.
+    """Write a preset file atomically (``core.atomic``); returns the path written.
 
-    The whole text is built and checked first; then written to a temporary file next to
-    ``path``, flushed to disk and moved into place with ``os.replace``. An existing ``path``
-    raises FileExistsError unless ``overwrite=True``. On any error the temporary file is
-    removed and ``path`` keeps its previous content (or stays absent). (Existence is checked
-    just before the move; a file created by another program in between is replaced.)
+    The whole text is built and checked first, so bad coefficients never touch the disk. An
+    existing ``path`` raises FileExistsError unless ``overwrite=True``; on any error ``path``
+    keeps its previous content (or stays absent) and no temporary file is left.
     """
-    path = Path(path)
-    text = preset_to_json(coeffs, metadata)  # raises before anything touches the disk
-    if not overwrite and path.exists():
-        raise FileExistsError(
-            f"preset file '{path}' already exists: choose another name, or pass "
-            "overwrite=True to replace it"
-        )
-    folder = path.parent
-    if not folder.is_dir():
-        raise FileNotFoundError(f"folder '{folder}' does not exist: create it first")
-    temporary = folder / f".{path.name}.{secrets.token_hex(6)}.tmp"
-    # O_EXCL: never reuse an existing file; 0o666 lets the umask decide the permissions.
-    fd = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        try:
-            stream = os.fdopen(fd, "w", encoding="utf-8", newline="\n")
-        except BaseException:
-            os.close(fd)
-            raise
-        with stream:
-            stream.write(text)
-            stream.flush()
-            os.fsync(stream.fileno())
-        if not overwrite and path.exists():
-            raise FileExistsError(
-                f"preset file '{path}' appeared while it was being written: choose another "
-                "name, or pass overwrite=True to replace it"
-            )
-        os.replace(temporary, path)
-    except BaseException:
-        try:
-            os.unlink(temporary)
-        except FileNotFoundError:
-            pass
-        raise
-    return path
+    text = preset_to_json(coeffs, metadata)
+    return write_text_atomic(path, text, overwrite=overwrite, what="preset file")
