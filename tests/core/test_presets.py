@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sh_lighting.core import presets
+from sh_lighting.core import atomic, presets
 from sh_lighting.core.presets import (
     PresetError,
     preset_from_dict,
@@ -297,7 +297,7 @@ def test_a_failed_write_leaves_the_destination_untouched_and_no_temporary_file(
     path = tmp_path / "light.json"
     if overwrite:
         path.write_text(OLD_TEXT)
-    monkeypatch.setattr(presets.os, target, replacement)
+    monkeypatch.setattr(atomic.os, target, replacement)
     with pytest.raises(error):
         write_preset(path, COEFFS, overwrite=overwrite)
     monkeypatch.undo()
@@ -316,7 +316,7 @@ def test_a_file_appearing_during_the_write_is_not_replaced(tmp_path, monkeypatch
         real_fsync(fd)
         path.write_text(OLD_TEXT)
 
-    monkeypatch.setattr(presets.os, "fsync", fsync_then_someone_creates_the_file)
+    monkeypatch.setattr(atomic.os, "fsync", fsync_then_someone_creates_the_file)
     with pytest.raises(FileExistsError, match="appeared while it was being written"):
         write_preset(path, COEFFS)
     assert path.read_text() == OLD_TEXT
