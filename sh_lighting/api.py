@@ -56,6 +56,18 @@ from .core.presets import PresetError
 
 WorldError = _world.WorldError
 
+__all__ = [
+    # computing, storing and applying the coefficients
+    "WorldError", "compute_from_world", "get_coefficients", "get_computed", "set_coefficients",
+    "reset", "ensure_node_group", "apply_to_materials", "remove_from_materials",
+    # presets and interop
+    "FORMATS", "PresetError", "export_preset", "import_preset", "shipped_presets",
+    "user_presets", "save_user_preset", "remove_user_preset",
+    # lighting design
+    "DesignError", "rotate", "match_mapping", "exposure", "saturation", "band_gains",
+    "flip_vertical", "apply_window", "split_sun", "describe", "negative_warning",
+]
+
 
 def _default_capture_width(scene):
     settings = getattr(scene, "sh_lighting", None)

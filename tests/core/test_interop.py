@@ -14,7 +14,6 @@ import pytest
 from quadrature import random_directions
 
 from sh_lighting.core import irradiance, sh_basis, uv_to_direction
-from sh_lighting.core.frames import BLENDER_TO_Y_UP
 from sh_lighting.core.interop import (
     BLENDER_TO_CMGEN,
     coefficients_from_filament_prescaled,
