@@ -22,7 +22,9 @@ $(LTS_STAMP): requirements-lts.txt
 demo: $(STAMP)
 	$(PY) -m tools.demo $(HDRI)
 
+# Lint for real errors (undefined names, unused imports), then the whole suite.
 test: $(STAMP)
+	$(PY) -m ruff check --select F,E9 sh_lighting tests tools benchmarks
 	$(PY) -m pytest
 
 # The same suite on Blender 4.2 LTS (the oldest version the manifest promises).

@@ -25,16 +25,16 @@ import platform
 import sys
 import tempfile
 import time
+from functools import partial
 from math import pi, sqrt
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
+import bpy  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-
-import bpy  # noqa: E402
 
 from benchmarks import render_bench  # noqa: E402
 from benchmarks.bench_prefilter import paired_times  # noqa: E402
@@ -170,7 +170,7 @@ def section_sweep(cfg, forest):
     for width, pairs in cfg["sweep"]:
         k = width // forest.shape[1]
         pixels = np.repeat(np.repeat(forest, k, axis=0), k, axis=1)
-        sum_s, proj_s, ratio = paired_times(pixels.sum, lambda: project_equirect(pixels), pairs)
+        sum_s, proj_s, ratio = paired_times(pixels.sum, partial(project_equirect, pixels), pairs)
         coeffs = project_equirect(pixels)
         drift = float(np.abs(coeffs - base).max() / np.abs(base).max())
         rows.append(
