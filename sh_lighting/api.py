@@ -51,6 +51,7 @@ from .blender import nodes as _nodes
 from .blender import properties as _properties
 from .blender import scene_data as _scene_data
 from .blender import world as _world
+from .blender import world_cache as _world_cache
 from .blender.preferences import ADDON_ID as _ADDON_ID
 from .core.presets import PresetError
 
@@ -82,13 +83,14 @@ def compute_from_world(scene, capture_width=None):
 
     Reads the Environment Texture image directly when the world is one, else renders a
     ``capture_width`` × ``capture_width/2`` equirectangular capture (default: the scene's
-    override, else the add-on preferences, else 256). The result also becomes the Reset
+    override, else the add-on preferences, else 256); an unchanged world reuses its last
+    result without reading the image again. The result also becomes the Reset
     values. Returns the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
     user-facing message, leaving the scene unchanged, when the world cannot be read.
     """
     if capture_width is None:
         capture_width = _default_capture_width(scene)
-    coeffs, _info = _world.world_coefficients(scene, capture_width=int(capture_width))
+    coeffs, _info = _world_cache.cached_world_coefficients(scene, capture_width=int(capture_width))
     return _properties.store_coefficients(scene, coeffs, computed=True)
 
 

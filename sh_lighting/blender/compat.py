@@ -44,3 +44,48 @@ def uses_nodes(datablock):
     if datablock.node_tree is None:
         return False
     return BLENDER_VERSION >= (5, 0, 0) or bool(datablock.use_nodes)
+
+
+def action_fcurves(datablock):
+    """The F-curves of the action assigned to ``datablock`` (its own slot's), or ().
+
+    4.2 keeps them on ``Action.fcurves``; 4.4 added layered actions with slots, and 5.0 removed
+    ``Action.fcurves``: the curves are in the channelbag of the ID's assigned slot
+    (``bpy_extras.anim_utils.animdata_get_channelbag_for_assigned_slot``, 4.4+).
+    """
+    animation = getattr(datablock, "animation_data", None)
+    if animation is None or animation.action is None:
+        return ()
+    action = animation.action
+    if hasattr(action, "layers"):
+        from bpy_extras import anim_utils
+
+        get = getattr(anim_utils, "animdata_get_channelbag_for_assigned_slot", None)
+        if get is not None:
+            channelbag = get(animation)
+            return tuple(channelbag.fcurves) if channelbag is not None else ()
+    return tuple(getattr(action, "fcurves", ()))
+
+
+def nla_fcurves(datablock):
+    """F-curves of the actions in ``datablock``'s NLA strips (any slot), or ().
+
+    Only used to find which properties the NLA animates (their values are not sampled).
+    """
+    animation = getattr(datablock, "animation_data", None)
+    if animation is None:
+        return ()
+    curves = []
+    for track in animation.nla_tracks:
+        for strip in track.strips:
+            action = strip.action
+            if action is None:
+                continue
+            if hasattr(action, "layers"):
+                for layer in action.layers:
+                    for action_strip in layer.strips:
+                        for bag in getattr(action_strip, "channelbags", ()):
+                            curves.extend(bag.fcurves)
+            else:
+                curves.extend(action.fcurves)
+    return tuple(curves)

@@ -11,6 +11,13 @@ that node, which also deletes the links into it. Nothing else in the material is
 The BSDF is the one linked to the active Material Output's Surface (through reroutes), or
 else the only Principled/Diffuse BSDF of the material. Applying to a material that already has
 the group first removes it, then applies it again (a refresh: nothing stacks).
+
+Materials without a diffuse part are left alone and reported as skipped: a Surface made only of
+(mixes and sums of) Emission, Glass, Refraction, Transparent, Holdout, Glossy, Metallic, hair,
+Ray Portal or Background shaders, or of a Principled BSDF whose unlinked Metallic or
+Transmission Weight is 1; an unconnected Surface (volume-only or empty). A node group in the
+surface counts as possibly diffuse. Only the materials given are changed, and the shared group
+is rebuilt only when the lighting needs another layout (``nodes.ensure_node_group``).
 Every material is checked before it is changed; an error while changing it is rolled back.
 """
 
@@ -142,6 +149,72 @@ def _check_editable(material):
         raise SkipMaterial("does not use nodes (no shader node tree in use)")
 
 
+# Shader nodes without a diffuse part (4.2 to 5.0 names; absent ones simply never match).
+NO_DIFFUSE_SHADERS = frozenset(
+    {
+        "ShaderNodeEmission",
+        "ShaderNodeBsdfGlass",
+        "ShaderNodeBsdfRefraction",
+        "ShaderNodeBsdfTransparent",
+        "ShaderNodeHoldout",
+        "ShaderNodeBsdfGlossy",
+        "ShaderNodeBsdfAnisotropic",
+        "ShaderNodeBsdfMetallic",
+        "ShaderNodeBsdfHair",
+        "ShaderNodeBsdfHairPrincipled",
+        "ShaderNodeBsdfRayPortal",
+        "ShaderNodeBackground",
+    }
+)
+SHADER_SUMS = frozenset({"ShaderNodeMixShader", "ShaderNodeAddShader"})
+# Unlinked Principled inputs that remove its diffuse base when at 1.
+PRINCIPLED_NON_DIFFUSE_INPUTS = ("Metallic", "Transmission Weight", "Transmission")
+
+
+def _surface_shaders(output):
+    """The shader nodes the Surface of ``output`` sums (through reroutes, Mix and Add Shader).
+
+    [] when the Surface is not connected.
+    """
+    leaves, stack, seen = [], [output.inputs["Surface"]], set()
+    while stack:
+        node = _source_node(stack.pop())
+        if node is None or node.as_pointer() in seen:
+            continue
+        seen.add(node.as_pointer())
+        if node.bl_idname in SHADER_SUMS and not node.mute:
+            stack.extend(s for s in node.inputs if s.type == "SHADER")
+        else:
+            leaves.append(node)
+    return leaves
+
+
+def _has_no_diffuse(node):
+    if node.bl_idname in NO_DIFFUSE_SHADERS:
+        return True
+    if node.bl_idname != "ShaderNodeBsdfPrincipled" or node.mute:
+        return False
+    for name in PRINCIPLED_NON_DIFFUSE_INPUTS:
+        socket = node.inputs.get(name)
+        if socket is not None and not socket.is_linked and socket.default_value >= 1.0:
+            return True
+    return False
+
+
+def _check_diffuse_part(active):
+    """SkipMaterial when what ``active`` renders has no diffuse part (see the docstring)."""
+    leaves = _surface_shaders(active)
+    if not leaves:
+        if _linked_socket(active.inputs["Volume"]) is not None:
+            raise SkipMaterial("volume only: no surface shader, so no diffuse part to light")
+        raise SkipMaterial("no diffuse part: the Material Output's Surface is not connected")
+    if all(_has_no_diffuse(node) for node in leaves):
+        kinds = ", ".join(sorted({node.bl_idname for node in leaves}))
+        raise SkipMaterial(
+            f"no diffuse base colour: the surface is only {kinds}, which has no diffuse part"
+        )
+
+
 class _Plan(NamedTuple):
     outputs: list  # every Material Output node
     active: object  # the output the BSDF was traced from, for placing the new node
@@ -157,6 +230,7 @@ def _plan(material):
     if not outputs:
         raise SkipMaterial("no Material Output node")
     active = next((node for node in outputs if node.is_active_output), outputs[0])
+    _check_diffuse_part(active)
     bsdf = _traced_bsdf(active)
     if bsdf is None:
         candidates = [node for node in tree.nodes if node.bl_idname in BASE_COLOUR_INPUTS]

@@ -1,14 +1,22 @@
 """The "SH Irradiance" shader node group: eq. 13 of the paper, built from native nodes only.
 
-One group serves every material and every scene of a .blend file. Its nine Attribute nodes of
-type View Layer read ``sh_L00`` ... ``sh_L22`` (``scene_data.PROPERTY_NAMES``) at render time
-from the view layer, scene or world being rendered, so
+One group serves every material and every scene of a .blend file. Its Attribute nodes of type
+View Layer read ``sh_L00`` ... ``sh_L22`` (``scene_data.PROPERTY_NAMES``) at render time from
+the view layer, scene or world being rendered, so
 
 * editing or keyframing a coefficient reaches the next render without rebuilding the tree;
 * a material shared by two scenes shows each scene's own lighting: the group does not depend on
   the scene it was built for, hence one group per file, not one per scene;
 * a saved .blend renders the same where this add-on is not installed (no Script/OSL node, no
   registered property: plain custom properties, REFERENCE.md §3), in Cycles and EEVEE alike.
+
+Fitted to the lighting (a ``GroupSpec`` chosen by ``fitting.fitted_spec``): the group holds
+only the terms the file's lighting needs (``core.pruning``: a term is left out when it, and the
+sum of everything left out, stay below the scene's tolerance at every keyed frame), scalar
+Math nodes when the kept coefficients are grey, and a clamp max(E, 0) only when E can go
+negative (or the scene asks for one). A band with no kept term has no nodes at all.
+``FULL_SPEC`` (all nine terms, RGB, no clamp) is what a file without coefficients gets; a
+tolerance of 0 keeps all nine terms (grey and clamp still follow the lighting).
 
 Interface
   inputs   Normal (vector, world space; unlinked or zero = the shading normal of the Geometry
@@ -19,22 +27,31 @@ Interface
            surface reflects), Shader (Emission of colour Diffuse, strength 1: a drop-in surface)
 
 The group is recognised by the custom property ``GROUP_MARKER`` (not by its name, which the
-user may change); ``ensure_node_group`` rebuilds the inside of the existing group (keeping its
-interface, so materials stay linked) instead of adding a second one.
+user may change). ``FIT_PROPERTY`` (JSON) records what it was built for: the spec, what was left
+out and its exact error bound, the node count, a fingerprint of the nodes (a hand edit is
+repaired at the next fit) and a signature of each scene's coefficient animation (the panel's
+"Refit needed" hint). The tree is rebuilt in place (its interface and the links of materials
+into it are kept) only when the spec or the fingerprint differs.
 """
 
+import hashlib
+import json
+from dataclasses import dataclass
 from math import pi
 
 import bpy
 
 from ..core.irradiance import C1, C2, C3, C4, C5
+from ..core.pruning import ALL_TERMS
 from ..core.sh import COEFFICIENT_NAMES
+from . import fitting
 from .scene_data import PROPERTY_NAMES
 
 GROUP_NAME = "SH Irradiance"
 # Custom property on the node group; its value is the layout version of the tree inside.
 GROUP_MARKER = "sh_lighting_group"
-GROUP_VERSION = 1
+GROUP_VERSION = 2
+FIT_PROPERTY = "sh_lighting_fit"
 
 # (name, in_out, socket type, default value, description), in interface order.
 INTERFACE = (
@@ -53,6 +70,41 @@ INTERFACE = (
 
 # Below this squared length the Normal input counts as unlinked (its default is zero).
 ZERO_NORMAL_SQUARED = 1e-12
+# Attribute node outputs by index: Color, Vector, Fac ("Factor" from 5.0 on), Alpha.
+ATTRIBUTE_VECTOR, ATTRIBUTE_FAC = 1, 2
+
+
+@dataclass(frozen=True)
+class GroupSpec:
+    """What the group computes: kept terms (indices l(l+1)+m), scalar math, clamp."""
+
+    terms: tuple = ALL_TERMS
+    scalar: bool = False
+    clamp: bool = False
+
+    def as_dict(self):
+        return {"terms": list(self.terms), "scalar": self.scalar, "clamp": self.clamp}
+
+    @classmethod
+    def from_dict(cls, data):
+        terms = tuple(sorted({int(t) for t in data["terms"] if 0 <= int(t) <= 8}))
+        return cls(terms, bool(data["scalar"]), bool(data["clamp"]))
+
+
+FULL_SPEC = GroupSpec()
+
+
+@dataclass(frozen=True)
+class FitReport:
+    """What ``refit_node_group`` did. ``group`` is None when the file has no SH group."""
+
+    group: object
+    spec: GroupSpec
+    rebuilt: bool
+    node_count: int
+    omitted: tuple  # names of the left-out terms
+    bound: float  # exact max |Σ omitted| over sphere and keyed frames, / mean irradiance
+    bound_absolute: float
 
 
 def is_sh_group(tree):
@@ -69,28 +121,140 @@ def find_node_group():
     return found[0] if found else None
 
 
+def fit_info(tree):
+    """The decoded ``FIT_PROPERTY`` of a group, or None (absent, unreadable, older layout)."""
+    if tree is None or tree.get(GROUP_MARKER) != GROUP_VERSION:
+        return None
+    try:
+        info = json.loads(tree[FIT_PROPERTY])
+        info["spec"] = GroupSpec.from_dict(info["spec"])
+        return info
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
 def ensure_node_group(scene):
-    """The file's "SH Irradiance" ShaderNodeTree, created or rebuilt in place.
+    """The file's "SH Irradiance" ShaderNodeTree, created if missing and fitted (see
+    ``refit_node_group``); a tree edited by hand is rebuilt, repairing the edit.
 
     ``scene`` is the scene whose lighting is meant; the group reads the coefficients of
-    whatever scene renders it (see the module docstring), so it is the same for all scenes.
-    Calling this again reuses the group: its interface is kept (links into it from materials
-    survive) and its nodes are rebuilt, repairing any edit made by hand.
+    whatever scene renders it, so it is fitted to every scene of the file that has them.
+    The interface is kept (links into it from materials survive).
     """
-    if not isinstance(scene, bpy.types.Scene):
-        raise TypeError(f"ensure_node_group needs a bpy.types.Scene, got {type(scene).__name__}")
+    _check_scene(scene)
     tree = find_node_group()
     if tree is None:
         tree = bpy.data.node_groups.new(GROUP_NAME, "ShaderNodeTree")
+    return _fit(tree).group
+
+
+def build_node_group(spec, name=GROUP_NAME):
+    """A new, unregistered-for-fitting group built to ``spec`` exactly (benchmarks, tests).
+
+    It carries no ``GROUP_MARKER``, so the add-on never finds, refits or reuses it.
+    """
+    tree = bpy.data.node_groups.new(name, "ShaderNodeTree")
     _ensure_interface(tree)
-    _build_nodes(tree)
-    tree[GROUP_MARKER] = GROUP_VERSION
+    _build_nodes(tree, spec)
+    return tree
+
+
+def refit_node_group(scene):
+    """Refit the file's SH group to the coefficients of every scene that has them.
+
+    The needed terms are those of the current values and of every keyframed value at every
+    frame of the scenes' frame (and preview) ranges (``fitting.scene_samples``). The tree is
+    rebuilt only when that set, the scalar/clamp choice or the nodes themselves differ from
+    what it holds. Without an SH group in the file nothing is created: returns a FitReport
+    with ``group`` None.
+    """
+    _check_scene(scene)
+    tree = find_node_group()
+    if tree is None:
+        return FitReport(None, FULL_SPEC, False, 0, (), 0.0, 0.0)
+    return _fit(tree)
+
+
+def _check_scene(scene):
+    if not isinstance(scene, bpy.types.Scene):
+        raise TypeError(f"the SH node group needs a bpy.types.Scene, got {type(scene).__name__}")
+
+
+def _fit(tree):
+    fit = fitting.fitted_spec(bpy.data.scenes)
+    spec = GroupSpec(fit.terms, fit.scalar, fit.clamp)
+    _ensure_interface(tree)
+    info = fit_info(tree)
+    rebuilt = info is None or info["spec"] != spec or info.get("fingerprint") != _fingerprint(tree)
+    if rebuilt:
+        _build_nodes(tree, spec)
+        tree[GROUP_MARKER] = GROUP_VERSION
     if hasattr(tree, "description"):  # NodeTree.description is not in every 4.x
-        tree.description = (
+        description = (
             "Diffuse lighting from 9 spherical-harmonic coefficients (scene custom properties "
             "sh_L00 ... sh_L22), eq. 13 of Ramamoorthi and Hanrahan 2001"
         )
-    return tree
+        if tree.description != description:
+            tree.description = description
+    record = {
+        "spec": spec.as_dict(),
+        "omitted": [COEFFICIENT_NAMES[i] for i in ALL_TERMS if i not in spec.terms],
+        "bound": fit.bound,
+        "bound_absolute": fit.bound_absolute,
+        "nodes": len(tree.nodes),
+        "fingerprint": _fingerprint(tree),
+        "scenes": fit.scenes,
+    }
+    text = json.dumps(record, sort_keys=True)
+    if tree.get(FIT_PROPERTY) != text:
+        tree[FIT_PROPERTY] = text
+    return FitReport(
+        tree, spec, rebuilt, len(tree.nodes), tuple(record["omitted"]), fit.bound,
+        fit.bound_absolute,
+    )
+
+
+def refit_hint(scene):
+    """None when the file's SH group suits ``scene``'s current lighting, else a short reason.
+
+    Cheap enough for a panel's draw: the current values only (no F-curve sampling), plus a
+    comparison of the scene's animation signature with the one the group was fitted to.
+    """
+    tree = find_node_group()
+    if tree is None:
+        return None
+    info = fit_info(tree)
+    spec = info["spec"] if info is not None else FULL_SPEC
+    recorded = info["scenes"].get(scene.name) if info is not None else None
+    return fitting.hint(scene, spec.terms, spec.scalar, spec.clamp, recorded)
+
+
+def _fingerprint(tree):
+    """A digest of the nodes, their settings, unlinked input values and links."""
+    parts = []
+    for node in sorted(tree.nodes, key=lambda n: n.name):
+        values = []
+        for socket in node.inputs:
+            if socket.is_linked or not hasattr(socket, "default_value"):
+                continue
+            value = socket.default_value
+            value = tuple(value) if hasattr(value, "__len__") else (value,)
+            values.append((socket.identifier, tuple(f"{v:.9g}" for v in value)))
+        settings = tuple(
+            str(getattr(node, key, "")) for key in ("operation", "attribute_type", "attribute_name")
+        )
+        parts.append((node.name, node.bl_idname, node.mute, settings, tuple(values)))
+    links = sorted(
+        (
+            link.from_node.name,
+            link.from_socket.identifier,
+            link.to_node.name,
+            link.to_socket.identifier,
+            bool(getattr(link, "is_muted", False)),
+        )
+        for link in tree.links
+    )
+    return hashlib.blake2b(repr((parts, links)).encode(), digest_size=16).hexdigest()
 
 
 def _ensure_interface(tree):
@@ -110,17 +274,21 @@ def _ensure_interface(tree):
         socket = existing.get((name, in_out))
         if socket is None:
             socket = interface.new_socket(name, in_out=in_out, socket_type=kind)
-        socket.description = text
-        if default is not None:
+        if socket.description != text:
+            socket.description = text
+        if default is not None and tuple(socket.default_value) != default:
             socket.default_value = default
     socket = _interface_socket(tree, "Normal", "INPUT")
-    socket.hide_value = True
+    if not socket.hide_value:
+        socket.hide_value = True
     # Order: outputs and inputs each in INTERFACE order (Blender lists outputs first).
-    for position, (name, in_out, *_rest) in enumerate(
-        [spec for spec in INTERFACE if spec[1] == "OUTPUT"]
-        + [spec for spec in INTERFACE if spec[1] == "INPUT"]
-    ):
-        interface.move(_interface_socket(tree, name, in_out), position)
+    ordered = [spec for spec in INTERFACE if spec[1] == "OUTPUT"] + [
+        spec for spec in INTERFACE if spec[1] == "INPUT"
+    ]
+    for position, (name, in_out, *_rest) in enumerate(ordered):
+        item = _interface_socket(tree, name, in_out)
+        if item.position != position:
+            interface.move(item, position)
 
 
 def _interface_socket(tree, name, in_out):
@@ -155,14 +323,9 @@ class _Builder:
         self.tree.links.new(from_socket, to_socket)
 
 
-def _build_nodes(tree):
-    """Clear ``tree`` and add the nodes of eq. 13 (see the module docstring)."""
-    tree.nodes.clear()
-    b = _Builder(tree)
-    group_in = b.node("NodeGroupInput", 0, 0)
+def _normal(b, group_in):
+    """n = Normal input if it is non-zero, else the shading normal; then normalised."""
     geometry = b.node("ShaderNodeNewGeometry", 0, 2)
-
-    # n = Normal input if it is non-zero, else the shading normal; then normalised.
     length2 = b.vector_math("DOT_PRODUCT", 1, 0, "|Normal|²")
     b.link(group_in.outputs["Normal"], length2.inputs[0])
     b.link(group_in.outputs["Normal"], length2.inputs[1])
@@ -175,77 +338,105 @@ def _build_nodes(tree):
     b.link(group_in.outputs["Normal"], chosen.inputs[2])
     normal = b.vector_math("NORMALIZE", 4, 1, "n")
     b.link(chosen.outputs["Vector"], normal.inputs[0])
+    return normal.outputs["Vector"]
 
-    # The polynomial factors of each L_lm in eq. 13.
-    xyz = b.node("ShaderNodeSeparateXYZ", 5, 0, "x y z")
-    b.link(normal.outputs["Vector"], xyz.inputs[0])
-    yzx = b.node("ShaderNodeCombineXYZ", 6, 0, "y z x")
-    for source, target in (("Y", "X"), ("Z", "Y"), ("X", "Z")):
-        b.link(xyz.outputs[source], yzx.inputs[target])
-    products = b.vector_math("MULTIPLY", 7, 0, "xy yz zx")
-    b.link(normal.outputs["Vector"], products.inputs[0])
-    b.link(yzx.outputs["Vector"], products.inputs[1])
-    cross = b.vector_math("SCALE", 8, 0, "2 c1 (xy yz zx)")
-    b.link(products.outputs["Vector"], cross.inputs[0])
-    cross.inputs["Scale"].default_value = 2.0 * C1
-    cross_xyz = b.node("ShaderNodeSeparateXYZ", 9, 0, "2c1 xy, 2c1 yz, 2c1 zx")
-    b.link(cross.outputs["Vector"], cross_xyz.inputs[0])
 
-    linear = b.vector_math("SCALE", 8, 1, "2 c2 n")
-    b.link(normal.outputs["Vector"], linear.inputs[0])
-    linear.inputs["Scale"].default_value = 2.0 * C2
-    linear_xyz = b.node("ShaderNodeSeparateXYZ", 9, 1, "2c2 x, 2c2 y, 2c2 z")
-    b.link(linear.outputs["Vector"], linear_xyz.inputs[0])
+def _factors(b, n, terms):
+    """{term index: output socket of its polynomial factor}, only for ``terms`` (l ≥ 1).
 
-    squares = b.vector_math("MULTIPLY", 7, 2, "x² y² z²")
-    b.link(normal.outputs["Vector"], squares.inputs[0])
-    b.link(normal.outputs["Vector"], squares.inputs[1])
-    f22 = b.vector_math("DOT_PRODUCT", 8, 2, "c1 (x² − y²)")
-    b.link(squares.outputs["Vector"], f22.inputs[0])
-    f22.inputs[1].default_value = (C1, -C1, 0.0)
-    squares_xyz = b.node("ShaderNodeSeparateXYZ", 8, 3, "x² y² z²")
-    b.link(squares.outputs["Vector"], squares_xyz.inputs[0])
-    f20 = b.math("MULTIPLY_ADD", 9, 3, "c3 z² − c5")
-    b.link(squares_xyz.outputs["Z"], f20.inputs[0])
-    f20.inputs[1].default_value = C3
-    f20.inputs[2].default_value = -C5
+    Band 1: 2 c2 (x, y, z). Band 2: 2 c1 (xy, yz, zx) from n ⊙ (y, z, x); since |n| = 1,
+    c3 z² − c5 = (x², y², z²) · (−c5, −c5, c3 − c5) and c1 (x² − y²) = (x², y², z²) · (c1, −c1, 0).
+    """
+    factors = {}
+    if {1, 2, 3} & set(terms):
+        linear = b.vector_math("SCALE", 8, 1, "2 c2 n")
+        b.link(n, linear.inputs[0])
+        linear.inputs["Scale"].default_value = 2.0 * C2
+        linear_xyz = b.node("ShaderNodeSeparateXYZ", 9, 1, "2c2 x, 2c2 y, 2c2 z")
+        b.link(linear.outputs["Vector"], linear_xyz.inputs[0])
+        factors.update({1: linear_xyz.outputs["Y"], 2: linear_xyz.outputs["Z"]})
+        factors[3] = linear_xyz.outputs["X"]
+    if {4, 5, 7} & set(terms):
+        xyz = b.node("ShaderNodeSeparateXYZ", 5, 0, "x y z")
+        b.link(n, xyz.inputs[0])
+        yzx = b.node("ShaderNodeCombineXYZ", 6, 0, "y z x")
+        for source, target in (("Y", "X"), ("Z", "Y"), ("X", "Z")):
+            b.link(xyz.outputs[source], yzx.inputs[target])
+        products = b.vector_math("MULTIPLY", 7, 0, "xy yz zx")
+        b.link(n, products.inputs[0])
+        b.link(yzx.outputs["Vector"], products.inputs[1])
+        cross = b.vector_math("SCALE", 8, 0, "2 c1 (xy yz zx)")
+        b.link(products.outputs["Vector"], cross.inputs[0])
+        cross.inputs["Scale"].default_value = 2.0 * C1
+        cross_xyz = b.node("ShaderNodeSeparateXYZ", 9, 0, "2c1 xy, 2c1 yz, 2c1 zx")
+        b.link(cross.outputs["Vector"], cross_xyz.inputs[0])
+        factors.update({4: cross_xyz.outputs["X"], 5: cross_xyz.outputs["Y"]})
+        factors[7] = cross_xyz.outputs["Z"]
+    if {6, 8} & set(terms):
+        squares = b.vector_math("MULTIPLY", 7, 2, "x² y² z²")
+        b.link(n, squares.inputs[0])
+        b.link(n, squares.inputs[1])
+        for index, weights, row, label in (
+            (6, (-C5, -C5, C3 - C5), 3, "c3 z² − c5"),
+            (8, (C1, -C1, 0.0), 2, "c1 (x² − y²)"),
+        ):
+            if index in terms:
+                dot = b.vector_math("DOT_PRODUCT", 8, row, label)
+                b.link(squares.outputs["Vector"], dot.inputs[0])
+                dot.inputs[1].default_value = weights
+                factors[index] = dot.outputs["Value"]
+    return factors
 
-    factors = {
-        "L1-1": linear_xyz.outputs["Y"],
-        "L10": linear_xyz.outputs["Z"],
-        "L11": linear_xyz.outputs["X"],
-        "L2-2": cross_xyz.outputs["X"],
-        "L2-1": cross_xyz.outputs["Y"],
-        "L20": f20.outputs["Value"],
-        "L21": cross_xyz.outputs["Z"],
-        "L22": f22.outputs["Value"],
-    }
 
-    # E = c4 L00 + Σ factor_lm L_lm, one Multiply Add per term (RGB as vectors).
+def _build_nodes(tree, spec):
+    """Clear ``tree`` and add the nodes of eq. 13 for ``spec`` (see the module docstring)."""
+    tree.nodes.clear()
+    b = _Builder(tree)
+    group_in = b.node("NodeGroupInput", 0, 0)
+    terms = tuple(sorted(spec.terms))
+    factors = _factors(b, _normal(b, group_in), terms) if any(terms) else {}
+
+    # E = Σ factor_lm L_lm, one (Vector) Math node per kept term; c4 for L00.
     total = None
-    for row, (name, prop) in enumerate(zip(COEFFICIENT_NAMES, PROPERTY_NAMES)):
+    kind = ATTRIBUTE_FAC if spec.scalar else ATTRIBUTE_VECTOR
+    new_math = b.math if spec.scalar else b.vector_math
+    for row, index in enumerate(terms):
+        name = COEFFICIENT_NAMES[index]
         attribute = b.node(
             "ShaderNodeAttribute",
             10,
             row,
             name,
             attribute_type="VIEW_LAYER",
-            attribute_name=prop,
+            attribute_name=PROPERTY_NAMES[index],
         )
-        if total is None:
-            term = b.vector_math("SCALE", 11, row, "c4 L00")
-            b.link(attribute.outputs["Vector"], term.inputs[0])
-            term.inputs["Scale"].default_value = C4
+        value = attribute.outputs[kind]
+        if index == 0:
+            term = new_math("MULTIPLY" if spec.scalar else "SCALE", 11, row, "c4 L00")
+            b.link(value, term.inputs[0])
+            term.inputs[1 if spec.scalar else "Scale"].default_value = C4
+        elif total is None:
+            term = new_math("MULTIPLY", 11, row, f"{name} term")
+            b.link(value, term.inputs[0])
+            b.link(factors[index], term.inputs[1])
         else:
-            term = b.vector_math("MULTIPLY_ADD", 11, row, f"+ {name} term")
-            b.link(attribute.outputs["Vector"], term.inputs[0])
-            b.link(factors[name], term.inputs[1])
-            b.link(total.outputs["Vector"], term.inputs[2])
-        total = term
+            term = new_math("MULTIPLY_ADD", 11, row, f"+ {name} term")
+            b.link(value, term.inputs[0])
+            b.link(factors[index], term.inputs[1])
+            b.link(total, term.inputs[2])
+        total = term.outputs[0]
+    if total is None:  # nothing kept: E = 0
+        total = b.node("ShaderNodeValue", 11, 0, "E = 0").outputs[0]
+        total.default_value = 0.0
+    if spec.clamp:
+        clamp = new_math("MAXIMUM", 12, 6, "max(E, 0)")
+        b.link(total, clamp.inputs[0])
+        clamp.inputs[1].default_value = 0.0 if spec.scalar else (0.0, 0.0, 0.0)
+        total = clamp.outputs[0]
 
     albedo_e = b.vector_math("MULTIPLY", 12, 7, "Albedo · E")
     b.link(group_in.outputs["Albedo"], albedo_e.inputs[0])
-    b.link(total.outputs["Vector"], albedo_e.inputs[1])
+    b.link(total, albedo_e.inputs[1])
     diffuse = b.vector_math("SCALE", 13, 7, "/ π")
     b.link(albedo_e.outputs["Vector"], diffuse.inputs[0])
     diffuse.inputs["Scale"].default_value = 1.0 / pi
@@ -254,6 +445,6 @@ def _build_nodes(tree):
     emission.inputs["Strength"].default_value = 1.0
 
     group_out = b.node("NodeGroupOutput", 15, 7)
-    b.link(total.outputs["Vector"], group_out.inputs["Irradiance"])
+    b.link(total, group_out.inputs["Irradiance"])
     b.link(diffuse.outputs["Vector"], group_out.inputs["Diffuse"])
     b.link(emission.outputs["Emission"], group_out.inputs["Shader"])

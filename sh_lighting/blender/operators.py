@@ -1,4 +1,4 @@
-"""Operators: Compute from World, Reset, Apply, Remove.
+"""Operators: Compute from World, Reset, Apply, Remove, Refit.
 
 Each operator reads the context once, hands plain values (scene, materials, widths) to the
 logic in ``world``, ``scene_data`` and ``materials``, and turns their exceptions into an
@@ -10,7 +10,7 @@ import time
 
 import bpy
 
-from . import materials, properties, scene_data, world
+from . import materials, nodes, properties, scene_data, world_cache
 from .preferences import ADDON_ID
 
 
@@ -76,12 +76,18 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
         width = properties.capture_width_for(scene.sh_lighting, _addon_preferences(context))
         start = time.perf_counter()
         try:
-            coeffs, info = world.world_coefficients(scene, capture_width=width)
+            coeffs, info = world_cache.cached_world_coefficients(scene, capture_width=width)
             properties.store_coefficients(scene, coeffs, computed=True)
         except ValueError as error:  # WorldError and invalid coefficients
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         elapsed = time.perf_counter() - start
+        if getattr(info, "cached", False):
+            self.report(
+                {"INFO"}, f"SH lighting reused: world '{info.world}' has not changed since it "
+                "was last computed"
+            )
+            return {"FINISHED"}
         source = getattr(info, "source", None)
         origin = {"image": "the world image", "capture": "a capture of the world"}.get(
             source, "the world"
@@ -180,10 +186,55 @@ class SHLIGHT_OT_remove(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def fit_summary(report):
+    """One line about a ``nodes.FitReport``: node count, what was left out, its exact bound."""
+    left_out = ", ".join(report.omitted) if report.omitted else "nothing"
+    text = f"{report.node_count} nodes; left out: {left_out}"
+    if report.omitted:
+        text += f" (error ≤ {100.0 * report.bound:.3g} % of the mean irradiance)"
+    return text
+
+
+class SHLIGHT_OT_refit(bpy.types.Operator):
+    """Fit the SH Irradiance node group to the coefficients of every scene at every keyframed
+    frame: only the terms they need, scalar math for grey lighting, a clamp only if needed"""
+
+    bl_idname = "shlight.refit"
+    bl_label = "Refit Node Group"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None:
+            cls.poll_message_set("No active scene")
+            return False
+        if nodes.find_node_group() is None:
+            cls.poll_message_set("No SH Irradiance node group yet: Apply to materials first")
+            return False
+        return True
+
+    def execute(self, context):
+        report = nodes.refit_node_group(context.scene)
+        state = "rebuilt" if report.rebuilt else "already fitted"
+        self.report({"INFO"}, f"SH node group {state}: {fit_summary(report)}")
+        return {"FINISHED"}
+
+
 classes = (
     SHLIGHT_OT_compute_from_world,
     SHLIGHT_OT_reset,
     SHLIGHT_OT_apply,
     SHLIGHT_OT_remove,
+    SHLIGHT_OT_refit,
 )
-register, unregister = bpy.utils.register_classes_factory(classes)
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    _register_classes()
+    world_cache.register_cache()
+
+
+def unregister():
+    world_cache.unregister_cache()
+    _unregister_classes()

@@ -2,13 +2,15 @@
 
 Both places draw with the same functions; the "Coefficients" sub-panel shows, per L_lm, what
 it does, its row value (scales the RGB triple) and the three channels, which are the scene's
-custom properties themselves (keyframable, read by materials at render time).
+custom properties themselves (keyframable, read by materials at render time). The "Node Group"
+sub-panel shows the fit settings, what the SH node group holds (node count, left-out terms and
+their exact error bound) and a "Refit" hint when the current lighting needs more.
 """
 
 import bpy
 
 from ..core.sh import COEFFICIENT_NAMES
-from . import properties, scene_data
+from . import nodes, properties, scene_data
 
 CHANNELS = "RGB"
 
@@ -34,6 +36,41 @@ def draw_main(layout, context):
     row = layout.row(align=True)
     row.operator("shlight.apply", text="Apply", icon="MATERIAL")
     row.operator("shlight.remove", text="Remove", icon="X")
+
+
+def draw_node_group(layout, context):
+    """The fit settings and what the SH node group holds: node count, left-out terms, bound."""
+    scene = context.scene
+    settings = scene.sh_lighting
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    layout.prop(settings, "fit_tolerance")
+    layout.prop(settings, "clamp_mode")
+    col = layout.column(align=True)
+    tree = nodes.find_node_group()
+    info = nodes.fit_info(tree)
+    if tree is None:
+        col.label(text="Node group: none yet (Apply creates it)", icon="NODETREE")
+        return
+    if info is None:
+        col.label(text=f"Node group: {len(tree.nodes)} nodes, not fitted", icon="NODETREE")
+    else:
+        spec = info["spec"]
+        kinds = ["grey (scalar math)" if spec.scalar else "RGB"]
+        if spec.clamp:
+            kinds.append("clamped at 0")
+        col.label(text=f"Node group: {info['nodes']} nodes, {', '.join(kinds)}", icon="NODETREE")
+        if info["omitted"]:
+            col.label(text="Left out: " + " ".join(info["omitted"]))
+            col.label(text=f"Left-out error ≤ {100.0 * info['bound']:.3g} % of mean irradiance")
+        else:
+            col.label(text="Left out: nothing (all 9 terms)")
+    hint = nodes.refit_hint(scene)
+    if hint:
+        row = col.row()
+        row.alert = True
+        row.label(text=hint, icon="ERROR")
+    layout.operator("shlight.refit", icon="FILE_REFRESH")
 
 
 def draw_coefficients(layout, context):
@@ -103,10 +140,36 @@ class SHLIGHT_PT_view3d_coefficients(_SceneMixin, bpy.types.Panel):
         draw_coefficients(self.layout, context)
 
 
+class SHLIGHT_PT_world_node_group(_SceneMixin, bpy.types.Panel):
+    bl_label = "Node Group"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "world"
+    bl_parent_id = "SHLIGHT_PT_world"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        draw_node_group(self.layout, context)
+
+
+class SHLIGHT_PT_view3d_node_group(_SceneMixin, bpy.types.Panel):
+    bl_label = "Node Group"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "SH Lighting"
+    bl_parent_id = "SHLIGHT_PT_view3d"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        draw_node_group(self.layout, context)
+
+
 classes = (
     SHLIGHT_PT_world,
     SHLIGHT_PT_world_coefficients,
+    SHLIGHT_PT_world_node_group,
     SHLIGHT_PT_view3d,
     SHLIGHT_PT_view3d_coefficients,
+    SHLIGHT_PT_view3d_node_group,
 )
 register, unregister = bpy.utils.register_classes_factory(classes)

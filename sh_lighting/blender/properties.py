@@ -14,8 +14,9 @@ Custom properties get their editing hints (description, soft limits, no 0-1 clam
 import bpy
 import numpy as np
 
+from ..core.pruning import DEFAULT_RELATIVE_TOLERANCE
 from ..core.sh import COEFFICIENT_NAMES
-from . import scene_data
+from . import nodes, scene_data
 
 # What each coefficient does, in Blender world axes (REFERENCE.md §1: Y1-1 ∝ y, Y10 ∝ z,
 # Y11 ∝ x, Y2-2 ∝ xy, Y2-1 ∝ yz, Y20 ∝ 3z² - 1, Y21 ∝ xz, Y22 ∝ x² - y²).
@@ -48,6 +49,17 @@ APPLY_TARGETS = (
 
 DEFAULT_CAPTURE_WIDTH = 256
 
+CLAMP_MODES = (
+    ("AUTO", "Auto", "Clamp the irradiance at 0 only where it can go negative"),
+    ("ALWAYS", "Always", "Always clamp the irradiance at 0 (one more node)"),
+    ("NEVER", "Never", "Never clamp: negative irradiance renders as is"),
+)
+
+
+def _refit(self, context):
+    """Update callback of the fit settings: refit the file's SH group to them."""
+    nodes.refit_node_group(self.id_data)
+
 
 def coefficient_description(index):
     """The tooltip of coefficient ``index``: name, what it does, what the numbers are."""
@@ -75,9 +87,13 @@ def ensure_coefficient_ui(scene):
 
 
 def store_coefficients(scene, coeffs, computed=False):
-    """``scene_data.set_coefficients`` plus the UI data of the custom properties."""
+    """``scene_data.set_coefficients`` plus the UI data of the custom properties, then the
+    file's SH node group refitted to the new values (``nodes.refit_node_group``: rebuilt only
+    when the set of needed terms changes; nothing happens without a group).
+    """
     c = scene_data.set_coefficients(scene, coeffs, computed=computed)
     ensure_coefficient_ui(scene)
+    nodes.refit_node_group(scene)
     return c
 
 
@@ -171,6 +187,29 @@ class SHLIGHT_PG_settings(bpy.types.PropertyGroup):
         soft_min=64,
         soft_max=2048,
         subtype="PIXEL",
+    )
+    fit_tolerance: bpy.props.FloatProperty(
+        name="Fit Tolerance",
+        description=(
+            "Leave a term out of the SH node group when it, and the sum of all left-out "
+            "terms, stay below this fraction of the mean irradiance everywhere on the sphere "
+            "at every keyframed frame; 0 keeps all nine terms"
+        ),
+        default=DEFAULT_RELATIVE_TOLERANCE,
+        min=0.0,
+        max=1.0,
+        soft_max=0.05,
+        precision=4,
+        step=1,
+        subtype="FACTOR",
+        update=_refit,
+    )
+    clamp_mode: bpy.props.EnumProperty(
+        name="Clamp",
+        description="Clamp the irradiance of the SH node group at 0 (max(E, 0))",
+        items=CLAMP_MODES,
+        default="AUTO",
+        update=_refit,
     )
 
 

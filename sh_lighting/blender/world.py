@@ -17,6 +17,9 @@ Two ways, chosen by reading the world's node tree (nothing is ever written to it
 
 Errors that no rendering can fix (no world, no output, a texture without its image, an image
 whose file is missing) raise ``WorldError`` with what to do; nothing in ``bpy.data`` changes.
+
+``world_cache.cached_world_coefficients`` wraps ``world_coefficients`` to reuse its last result
+while the world is unchanged.
 """
 
 import time
@@ -61,6 +64,7 @@ class WorldInfo:
     strength: float | None = None
     reason: str = ""
     capture_width: int | None = None
+    cached: bool = False  # reused by ``world_cache``; ``elapsed`` is then the look-up's time
 
 
 @dataclass(frozen=True)
@@ -331,3 +335,4 @@ def world_coefficients(scene, capture_width=256):
         capture_width=int(capture_width),
     )
     return coeffs, info
+

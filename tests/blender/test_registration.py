@@ -57,7 +57,7 @@ def test_operators_are_undoable(addon, cls):
 def test_settings_properties_are_described_and_unclamped(addon):
     rna = bpy.types.Scene.bl_rna.properties["sh_lighting"].fixed_type
     names = [p.identifier for p in rna.properties if p.identifier not in {"rna_type", "name"}]
-    assert len(names) == 9 + 3
+    assert len(names) == 9 + 3 + 2  # rows, 3 settings, fit tolerance and clamp mode
     for prop in rna.properties:
         if prop.identifier in {"rna_type", "name"}:
             continue
