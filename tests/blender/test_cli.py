@@ -16,6 +16,7 @@ from pathlib import Path
 import bpy
 import numpy as np
 import pytest
+from blender_files import write_exr
 from numpy.testing import assert_allclose
 
 from sh_lighting import cli
@@ -43,18 +44,6 @@ def run(*args, cwd=ROOT, env_extra=None, python_args=("-m", "sh_lighting"), time
     )
 
 
-def write_exr(path, pixels):
-    """Save top-to-bottom float ``pixels`` (H, W, 4) losslessly (test_world.py's recipe)."""
-    height, width = pixels.shape[:2]
-    image = bpy.data.images.new("tmp", width, height, float_buffer=True, alpha=True)
-    image.pixels.foreach_set(np.ascontiguousarray(pixels[::-1], dtype=np.float32).ravel())
-    scene = bpy.data.scenes.new("tmp")
-    settings = scene.render.image_settings
-    settings.file_format, settings.color_mode, settings.color_depth = "OPEN_EXR", "RGBA", "32"
-    image.save_render(str(path), scene=scene)
-    bpy.data.scenes.remove(scene)
-    bpy.data.images.remove(image)
-    return path
 
 
 def constant_pixels(rgb, height=8, width=16):

@@ -12,6 +12,7 @@ import textwrap
 import bpy
 import numpy as np
 import pytest
+from blender_files import write_exr
 from numpy.testing import assert_allclose, assert_array_equal
 
 import sh_lighting
@@ -63,20 +64,6 @@ BYTE = 0.5 / 255 + 1e-6
 # -- worlds ------------------------------------------------------------------------------------
 
 
-def write_exr(path, pixels):
-    """Top-to-bottom float ``pixels`` (H, W, 3 or 4) → a lossless 32-bit RGBA OpenEXR."""
-    height, width = pixels.shape[:2]
-    rgba = np.ones((height, width, 4), dtype=np.float32)
-    rgba[..., :3] = pixels[..., :3]
-    image = bpy.data.images.new("tmp", width, height, float_buffer=True, alpha=True)
-    image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())
-    scene = bpy.data.scenes.new("tmp")
-    settings = scene.render.image_settings
-    settings.file_format, settings.color_mode, settings.color_depth = "OPEN_EXR", "RGBA", "32"
-    image.save_render(str(path), scene=scene)
-    bpy.data.scenes.remove(scene)
-    bpy.data.images.remove(image)
-    return str(path)
 
 
 def environment_world(scene, path, strength=1.0, rotation=None):

@@ -5,10 +5,12 @@ strength s has the exact coefficients L00 = 2√π c s and L_lm = 0 otherwise (R
 """
 
 import math
+import os
 
 import bpy
 import numpy as np
 import pytest
+from blender_files import write_constant_exr
 from numpy.testing import assert_allclose
 
 from sh_lighting import api
@@ -22,20 +24,6 @@ FLOAT32_TOL = 1e-6
 KNOWN = np.arange(27, dtype=np.float64).reshape(9, 3) / 10.0 - 1.0  # signed, some > 1
 
 
-def write_exr(path, rgb, width=16, height=8):
-    """A constant-colour 32-bit float EXR (ZIP, lossless); the scene's settings are restored."""
-    image = bpy.data.images.new("sh_test_exr", width, height, alpha=True, float_buffer=True)
-    pixels = np.empty((height, width, 4), dtype=np.float32)
-    pixels[...] = (*rgb, 1.0)
-    image.pixels.foreach_set(pixels.ravel())
-    scene = bpy.context.scene
-    settings = scene.render.image_settings
-    saved = settings.file_format, settings.color_depth, settings.exr_codec
-    settings.file_format, settings.color_depth, settings.exr_codec = "OPEN_EXR", "32", "ZIP"
-    image.save_render(str(path), scene=scene)
-    settings.file_format, settings.color_depth, settings.exr_codec = saved
-    bpy.data.images.remove(image)
-    return path
 
 
 def image_world(scene, path, strength=STRENGTH, name="SH Test World"):
@@ -77,7 +65,7 @@ def run_execute(cls):
 
 
 def test_compute_operator_on_constant_exr_world_and_undo(addon, tmp_path):
-    image_world(bpy.context.scene, write_exr(tmp_path / "constant.exr", COLOUR))
+    image_world(bpy.context.scene, write_constant_exr(tmp_path / "constant.exr", COLOUR))
     bpy.ops.ed.undo_push(message="before compute")
     # 'EXEC_DEFAULT', True: push an undo step as a button click does.
     assert bpy.ops.shlight.compute_from_world("EXEC_DEFAULT", True) == {"FINISHED"}
@@ -95,7 +83,7 @@ def test_compute_operator_on_constant_exr_world_and_undo(addon, tmp_path):
 
 
 def test_compute_operator_reports_elapsed_time(addon, tmp_path):
-    image_world(bpy.context.scene, write_exr(tmp_path / "constant.exr", COLOUR))
+    image_world(bpy.context.scene, write_constant_exr(tmp_path / "constant.exr", COLOUR))
     result, reports = run_execute(operators.SHLIGHT_OT_compute_from_world)
     assert result == {"FINISHED"}
     [(kind, message)] = reports
@@ -126,7 +114,7 @@ def test_capture_width_comes_from_the_scene_override(addon, monkeypatch):
 
 def test_compute_api_on_constant_exr_world(addon, tmp_path):
     scene = bpy.context.scene
-    image_world(scene, write_exr(tmp_path / "grey.exr", (0.75, 0.75, 0.75)), strength=0.5)
+    image_world(scene, write_constant_exr(tmp_path / "grey.exr", (0.75, 0.75, 0.75)), strength=0.5)
     coeffs = api.compute_from_world(scene)
     expected = expected_constant((0.75, 0.75, 0.75), 0.5)
     assert coeffs.shape == (9, 3)
@@ -154,13 +142,13 @@ def environment_without_image(scene, tmp_path):
 
 
 def missing_image_file(scene, tmp_path):
-    path = write_exr(tmp_path / "gone.exr", COLOUR)
+    path = write_constant_exr(tmp_path / "gone.exr", COLOUR)
     image_world(scene, path)
-    path.unlink()
+    os.unlink(path)
 
 
 def disconnected_output(scene, tmp_path):
-    world = image_world(scene, write_exr(tmp_path / "constant.exr", COLOUR))
+    world = image_world(scene, write_constant_exr(tmp_path / "constant.exr", COLOUR))
     output = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeOutputWorld")
     for link in list(output.inputs["Surface"].links):
         world.node_tree.links.remove(link)

@@ -16,6 +16,7 @@ from types import SimpleNamespace
 import bpy
 import numpy as np
 import pytest
+from blender_files import write_constant_exr
 from numpy.testing import assert_allclose, assert_array_equal
 
 from sh_lighting.blender import preset_io, presets_ui, scene_data
@@ -133,16 +134,6 @@ def test_import_keeps_the_reset_values(scene, tmp_path):
     assert_array_equal(scene_data.get_computed(scene), OTHER)
 
 
-def write_constant_exr(path, rgb, width=16, height=8):
-    image = bpy.data.images.new("tmp", width, height, float_buffer=True, alpha=True)
-    image.pixels.foreach_set(np.tile(np.array([*rgb, 1.0], np.float32), width * height))
-    temp_scene = bpy.data.scenes.new("tmp")
-    settings = temp_scene.render.image_settings
-    settings.file_format, settings.color_mode, settings.color_depth = "OPEN_EXR", "RGBA", "32"
-    image.save_render(str(path), scene=temp_scene)
-    bpy.data.scenes.remove(temp_scene)
-    bpy.data.images.remove(image)
-    return path
 
 
 def test_metadata_names_the_world_image_while_the_values_are_the_computed_ones(addon, tmp_path):

@@ -15,6 +15,7 @@ from types import SimpleNamespace
 import bpy
 import numpy as np
 import pytest
+from blender_files import write_exr
 
 from sh_lighting.blender import compat
 from sh_lighting.blender import world as world_module
@@ -47,22 +48,6 @@ def new_world(name):
     return world
 
 
-def write_exr(path, pixels):
-    """Save top-to-bottom float ``pixels`` (H, W, 4) as a 32-bit RGBA OpenEXR, losslessly.
-
-    (``Image.save`` on a generated float image tags the file as sRGB display data and changes
-    the values; ``save_render`` with 32-bit EXR settings does not.)
-    """
-    height, width = pixels.shape[:2]
-    image = bpy.data.images.new("tmp", width, height, float_buffer=True, alpha=True)
-    image.pixels.foreach_set(np.ascontiguousarray(pixels[::-1], dtype=np.float32).ravel())
-    scene = bpy.data.scenes.new("tmp")
-    settings = scene.render.image_settings
-    settings.file_format, settings.color_mode, settings.color_depth = "OPEN_EXR", "RGBA", "32"
-    image.save_render(str(path), scene=scene)
-    bpy.data.scenes.remove(scene)
-    bpy.data.images.remove(image)
-    return str(path)
 
 
 def write_png(path, values, alpha=None):
