@@ -11,7 +11,7 @@ import textwrap
 
 import bpy
 
-from . import design, previews, scene_data
+from . import design, panels, previews, scene_data
 
 NO_COEFFICIENTS = "No SH coefficients yet: run Compute from World first"
 WARNING_WIDTH = 44  # characters per line of the wrapped warning
@@ -337,30 +337,9 @@ def draw_design(layout, context):
     draw_buttons(layout)
 
 
-class _DesignPanel:
-    bl_label = "Design"
-    bl_options = {"DEFAULT_CLOSED"}
-
-    @classmethod
-    def poll(cls, context):
-        return context.scene is not None and hasattr(context.scene, "sh_lighting")
-
-    def draw(self, context):
-        draw_design(self.layout, context)
-
-
-class SHLIGHT_PT_world_design(_DesignPanel, bpy.types.Panel):
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "world"
-    bl_parent_id = "SHLIGHT_PT_world"
-
-
-class SHLIGHT_PT_view3d_design(_DesignPanel, bpy.types.Panel):
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "SH Lighting"
-    bl_parent_id = "SHLIGHT_PT_view3d"
+SHLIGHT_PT_world_design, SHLIGHT_PT_view3d_design = panels.sub_panels(
+    "design", "Design", draw_design, options={"DEFAULT_CLOSED"}
+)
 
 
 classes = (

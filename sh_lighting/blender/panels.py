@@ -98,71 +98,38 @@ class _SceneMixin:
         return context.scene is not None and hasattr(context.scene, "sh_lighting")
 
 
-class SHLIGHT_PT_world(_SceneMixin, bpy.types.Panel):
-    bl_label = "SH Lighting"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "world"
-
-    def draw(self, context):
-        draw_main(self.layout, context)
+# Where the add-on shows itself: World Properties and the 3D Viewport sidebar.
+LOCATIONS = {
+    "world": {"bl_space_type": "PROPERTIES", "bl_region_type": "WINDOW", "bl_context": "world"},
+    "view3d": {"bl_space_type": "VIEW_3D", "bl_region_type": "UI", "bl_category": "SH Lighting"},
+}
 
 
-class SHLIGHT_PT_world_coefficients(_SceneMixin, bpy.types.Panel):
-    bl_label = "Coefficients"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "world"
-    bl_parent_id = "SHLIGHT_PT_world"
-
-    def draw(self, context):
-        draw_coefficients(self.layout, context)
-
-
-class SHLIGHT_PT_view3d(_SceneMixin, bpy.types.Panel):
-    bl_label = "SH Lighting"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "SH Lighting"
-
-    def draw(self, context):
-        draw_main(self.layout, context)
+def _panel(name, label, draw, parent=None, options=()):
+    """One Panel class per location, ``SHLIGHT_PT_<location>[_<name>]``, drawing ``draw``."""
+    panels = []
+    for where, settings in LOCATIONS.items():
+        attributes = {"bl_label": label, "bl_options": set(options), **settings,
+                      "draw": lambda self, context: draw(self.layout, context)}
+        if parent is not None:
+            attributes["bl_parent_id"] = f"SHLIGHT_PT_{where}"
+        suffix = f"_{name}" if name else ""
+        panels.append(type(f"SHLIGHT_PT_{where}{suffix}", (_SceneMixin, bpy.types.Panel), attributes))
+    return tuple(panels)
 
 
-class SHLIGHT_PT_view3d_coefficients(_SceneMixin, bpy.types.Panel):
-    bl_label = "Coefficients"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "SH Lighting"
-    bl_parent_id = "SHLIGHT_PT_view3d"
-
-    def draw(self, context):
-        draw_coefficients(self.layout, context)
+def sub_panels(name, label, draw, options=()):
+    """A sub-panel ``label`` under each main panel, sharing ``draw(layout, context)``."""
+    return _panel(name, label, draw, parent=True, options=options)
 
 
-class SHLIGHT_PT_world_node_group(_SceneMixin, bpy.types.Panel):
-    bl_label = "Node Group"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "world"
-    bl_parent_id = "SHLIGHT_PT_world"
-    bl_options = {"DEFAULT_CLOSED"}
-
-    def draw(self, context):
-        draw_node_group(self.layout, context)
-
-
-class SHLIGHT_PT_view3d_node_group(_SceneMixin, bpy.types.Panel):
-    bl_label = "Node Group"
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "SH Lighting"
-    bl_parent_id = "SHLIGHT_PT_view3d"
-    bl_options = {"DEFAULT_CLOSED"}
-
-    def draw(self, context):
-        draw_node_group(self.layout, context)
-
+SHLIGHT_PT_world, SHLIGHT_PT_view3d = _panel("", "SH Lighting", draw_main)
+SHLIGHT_PT_world_coefficients, SHLIGHT_PT_view3d_coefficients = sub_panels(
+    "coefficients", "Coefficients", draw_coefficients
+)
+SHLIGHT_PT_world_node_group, SHLIGHT_PT_view3d_node_group = sub_panels(
+    "node_group", "Node Group", draw_node_group, options={"DEFAULT_CLOSED"}
+)
 
 classes = (
     SHLIGHT_PT_world,

@@ -35,7 +35,7 @@ from bpy.props import BoolProperty, EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ..core.presets import PresetError
-from . import preset_io, scene_data
+from . import panels, preset_io, scene_data
 
 LOAD = "shlight.load_preset"
 ADD = "shlight.preset_add"
@@ -301,29 +301,9 @@ def draw_presets(layout, _context):
     row.operator(EXPORT, text="Export", icon="EXPORT")
 
 
-class _PresetsPanel:
-    bl_label = "Presets"
-
-    @classmethod
-    def poll(cls, context):
-        return context.scene is not None and hasattr(context.scene, "sh_lighting")
-
-    def draw(self, context):
-        draw_presets(self.layout, context)
-
-
-class SHLIGHT_PT_world_presets(_PresetsPanel, bpy.types.Panel):
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "world"
-    bl_parent_id = "SHLIGHT_PT_world"
-
-
-class SHLIGHT_PT_view3d_presets(_PresetsPanel, bpy.types.Panel):
-    bl_space_type = "VIEW_3D"
-    bl_region_type = "UI"
-    bl_category = "SH Lighting"
-    bl_parent_id = "SHLIGHT_PT_view3d"
+SHLIGHT_PT_world_presets, SHLIGHT_PT_view3d_presets = panels.sub_panels(
+    "presets", "Presets", draw_presets
+)
 
 
 classes = (

@@ -1,4 +1,4 @@
-"""Prefiltering: the lighting coefficients L_lm = ∫ L(ω) Y_lm(ω) dω of an equirectangular map (eq. 10).
+"""Prefiltering: L_lm = ∫ L(ω) Y_lm(ω) dω of an equirectangular map (eq. 10).
 
 The map is taken as piecewise constant over its texels and every Y_lm is integrated exactly
 over every texel's area, not sampled at its centre. Each real SH separates as
@@ -38,7 +38,9 @@ def _theta_integrands(theta, max_order):
     """f_t(θ) = K_lm Q_l^m(cos θ) sin^m θ · sin θ for each θ function t = (l, m >= 0)."""
     q = legendre_q(max_order, np.cos(theta))
     sin_t = np.sin(theta)
-    return [normalisation(l, m) * q[l, m] * sin_t ** (m + 1) for l, m in _theta_functions(max_order)]
+    return [
+        normalisation(l, m) * q[l, m] * sin_t ** (m + 1) for l, m in _theta_functions(max_order)
+    ]
 
 
 def row_weights(height, max_order=2):

@@ -8,6 +8,7 @@ split can be predicted texel by texel.
 
 import math
 import textwrap
+from types import SimpleNamespace
 
 import bpy
 import numpy as np
@@ -617,8 +618,12 @@ def draw(context):
 def test_design_panels_are_under_both_main_panels(addon):
     assert bpy.types.SHLIGHT_PT_world_design.bl_parent_id == "SHLIGHT_PT_world"
     assert bpy.types.SHLIGHT_PT_view3d_design.bl_parent_id == "SHLIGHT_PT_view3d"
+    expected = [call[:2] for call in draw(bpy.context)]
     for cls in (design_ui.SHLIGHT_PT_world_design, design_ui.SHLIGHT_PT_view3d_design):
-        assert cls.bl_label == "Design" and cls.draw is design_ui._DesignPanel.draw
+        calls = []
+        cls.draw(SimpleNamespace(layout=RecordingLayout(calls)), bpy.context)
+        assert cls.bl_label == "Design"
+        assert [call[:2] for call in calls] == expected  # both draw draw_design
 
 
 def test_design_panel_draws_previews_warning_words_and_buttons(addon):

@@ -12,7 +12,8 @@ import os
 import bpy
 import numpy as np
 import pytest
-from blender.test_operators import expected_constant, image_world, write_exr
+from blender.test_operators import expected_constant, image_world
+from blender_files import write_constant_exr as write_exr
 from numpy.testing import assert_allclose
 
 from sh_lighting.blender import compat, operators, world, world_cache
