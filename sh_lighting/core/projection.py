@@ -12,12 +12,18 @@ so the integral over texel (i, j) is a row weight times a column weight:
   rule of far higher degree (checked against its closed-form antiderivative);
 * column weight ∫ cos mφ dφ = (2 sin(m h) / m) cos(m φ_j) with h = π/W (sin likewise).
 
-The sum over texels is done in two steps: blocks of rows against the row weights (one float64
-matrix product per block, whatever the input dtype), then the resulting (T, W) sums against
-the column weights. A constant map therefore gives exactly L00 = 2√π c and zeros elsewhere (to
-rounding), and replicating texels does not change the result.
+The sum over texels is done in two steps: each row against the column weights of every
+(m, cos/sin) pair, then those (H, 2L+1) sums against the row weights. The first step is the only
+one that touches every texel: blocks of rows are cast to float64 (whatever the input dtype) and
+multiplied by the column weights, a few rows per matrix product so that each product is small
+enough for BLAS to run it on one core, while the rows are shared out between threads (numpy
+releases the GIL), one band of rows per core. A constant map therefore gives exactly
+L00 = 2√π c and zeros elsewhere (to rounding), and replicating texels does not change the result.
 """
 
+import os
+from concurrent.futures import ThreadPoolExecutor
+from functools import lru_cache
 from math import pi
 
 import numpy as np
@@ -25,8 +31,12 @@ import numpy as np
 from .equirect import check_pixels, column_centres, describe_nonfinite, row_centres
 from .sh import legendre_q, normalisation, num_coefficients, sh_index
 
-# Rows cast to float64 and multiplied at a time: 64 rows of a 4096-wide RGBA map are 8 MB.
+# Rows cast to float64 at a time by each thread: 64 rows of a 4096-wide RGB map are 6 MB.
 ROWS_PER_BLOCK = 64
+# OpenBLAS runs a product with m·n·k at most 2^18 on the calling thread alone; keeping every
+# product under it lets the threads below use the cores instead of competing with BLAS's own.
+SINGLE_CORE_PRODUCT = 1 << 18
+MAX_THREADS = 8
 
 
 def _theta_functions(max_order):
@@ -43,6 +53,7 @@ def _theta_integrands(theta, max_order):
     ]
 
 
+@lru_cache(maxsize=16)
 def row_weights(height, max_order=2):
     """w[i, t] = ∫ K_lm P_l^m(cos θ) sin θ dθ over row i for each θ function t = (l, m >= 0).
 
@@ -51,12 +62,15 @@ def row_weights(height, max_order=2):
     any row, even the whole [0, π] of a one-row map (error bound below 1e-17 of the integrand's
     size). Unlike the difference of an antiderivative (``row_weights_closed_form``), nothing
     cancels, so the tiny weights of the pole rows of tall maps keep full relative accuracy.
-    Returns shape (H, number of θ functions).
+    Returns shape (H, number of θ functions), read-only: it is cached per (height, order).
     """
     nodes, node_weights = np.polynomial.legendre.leggauss(2 * max_order + 16)
     half = 0.5 * pi / height
     theta = row_centres(height)[:, None] + half * nodes[None, :]
-    return np.stack([f @ node_weights for f in _theta_integrands(theta, max_order)], axis=-1) * half
+    integrands = _theta_integrands(theta, max_order)
+    weights = np.stack([f @ node_weights for f in integrands], axis=-1) * half
+    weights.setflags(write=False)
+    return weights
 
 
 def row_weights_closed_form(height, max_order=2):
@@ -92,25 +106,60 @@ def column_weights(width, max_order=2):
     return np.cos(phi) * shrink, np.sin(phi) * shrink
 
 
-def row_sums(pixels, weights, zero_nonfinite=False):
-    """B[t, j, c] = Σ_i w[i, t] pixels[i, j, c] in float64, shape (T, W, 3).
+def _phi_functions(max_order):
+    """Rows of ``column_sums``: (m, 0) for ∫ cos mφ (m = 0..L), then (m, 1) for ∫ sin mφ."""
+    return [(m, 0) for m in range(max_order + 1)] + [(m, 1) for m in range(1, max_order + 1)]
 
-    Blocks of rows are cast to float64 (from any input dtype and strides) and multiplied by
-    their row weights in one matrix product each; only a block and B are ever held.
+
+def column_sums(pixels, max_order=2, zero_nonfinite=False):
+    """S[i, k, c] = Σ_j (∫ over column j of φ function k) pixels[i, j, c], float64 (H, 2L+1, 3).
+
+    φ function k runs over ``_phi_functions``. Rows are shared between threads in contiguous
+    bands; each casts blocks of its rows to float64 and multiplies them by the weights.
     """
-    height, width, channels = pixels.shape
-    total = np.zeros((weights.shape[1], width * channels))
-    product = np.empty_like(total)
-    block = np.empty((ROWS_PER_BLOCK, width * channels))
-    for r0 in range(0, height, ROWS_PER_BLOCK):
-        r1 = min(height, r0 + ROWS_PER_BLOCK)
-        x = block[: r1 - r0]
-        x.reshape(r1 - r0, width, channels)[...] = pixels[r0:r1]
+    height, width = pixels.shape[:2]
+    cos_w, sin_w = column_weights(width, max_order)
+    weights = np.ascontiguousarray(np.concatenate([cos_w, sin_w[:, 1:]], axis=1).T)
+    sums = np.empty((height, weights.shape[0], 3))
+    bands = np.linspace(0, height, _thread_count(height) + 1).astype(int)
+    work = [(pixels, weights, sums, r0, r1, zero_nonfinite) for r0, r1 in zip(bands, bands[1:])]
+    if len(work) == 1:
+        _band_column_sums(*work[0])
+    else:
+        with ThreadPoolExecutor(len(work)) as pool:
+            for done in [pool.submit(_band_column_sums, *w) for w in work]:
+                done.result()
+    return sums
+
+
+def _thread_count(height):
+    """One thread per available core, at most MAX_THREADS, and none without a block of rows."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, MAX_THREADS, height // ROWS_PER_BLOCK))
+
+
+def _band_column_sums(pixels, weights, sums, r0, r1, zero_nonfinite):
+    """Fill sums[r0:r1]: float64 blocks of rows (channel-planar) times the column weights."""
+    functions, width = weights.shape
+    group = max(1, SINGLE_CORE_PRODUCT // (functions * width * 3))  # rows per product
+    rows = max(group, ROWS_PER_BLOCK // group * group)
+    block = np.empty((rows, 3, width))
+    for b0 in range(r0, r1, rows):
+        b1 = min(r1, b0 + rows)
+        n = b1 - b0
+        g = group if n % group == 0 else 1
+        x = block[:n]
+        x[...] = pixels[b0:b1, :, :3].transpose(0, 2, 1)
         if zero_nonfinite:
             x[~np.isfinite(x)] = 0.0
-        np.dot(weights[r0:r1].T, x, out=product)
-        total += product
-    return total.reshape(-1, width, channels)[..., :3]
+        # (n/g, F, 3g): each product is the F×W weights times W×3g texels, on one core.
+        products = np.matmul(weights, x.reshape(n // g, 3 * g, width).transpose(0, 2, 1))
+        sums[b0:b1] = products.reshape(n // g, functions, g, 3).transpose(0, 2, 1, 3).reshape(
+            n, functions, 3
+        )
 
 
 def project_equirect(pixels, max_order=2, nonfinite="raise"):
@@ -131,8 +180,8 @@ def project_equirect(pixels, max_order=2, nonfinite="raise"):
 
 
 def _combine(a, weights, max_order, nonfinite):
-    """Row sums, the non-finite policy, then the column weights: ((max_order+1)², 3)."""
-    sums = row_sums(a, weights)
+    """Column sums, the non-finite policy, then the row weights: ((max_order+1)², 3)."""
+    sums = column_sums(a, max_order)
     if not np.isfinite(sums).all():
         count, message = describe_nonfinite(a)
         if count and nonfinite == "raise":
@@ -140,13 +189,13 @@ def _combine(a, weights, max_order, nonfinite):
                 f"pixels contain {message}: repair the image, or pass nonfinite='zero' "
                 "to treat those texels as black"
             )
-        sums = row_sums(a, weights, zero_nonfinite=True)
-    cos_w, sin_w = column_weights(a.shape[1], max_order)
+        sums = column_sums(a, max_order, zero_nonfinite=True)
+    phi_index = {pair: k for k, pair in enumerate(_phi_functions(max_order))}
     coeffs = np.zeros((num_coefficients(max_order), 3))
     for t, (l, m) in enumerate(_theta_functions(max_order)):
-        coeffs[sh_index(l, m)] = cos_w[:, m] @ sums[t]
+        coeffs[sh_index(l, m)] = weights[:, t] @ sums[:, phi_index[m, 0]]
         if m > 0:
-            coeffs[sh_index(l, -m)] = sin_w[:, m] @ sums[t]
+            coeffs[sh_index(l, -m)] = weights[:, t] @ sums[:, phi_index[m, 1]]
     if not (np.isfinite(sums).all() and np.isfinite(coeffs).all()):
         raise ValueError(
             "the image's values are too large: its integrals overflow float64 "
