@@ -142,3 +142,17 @@ def test_row_weights_equal_the_closed_form_antiderivative(height, order):
 
     fast, exact = row_weights(height, order), row_weights_closed_form(height, order)
     assert np.abs(fast - exact).max() < 1e-14 * np.abs(exact).max()
+
+
+@pytest.mark.parametrize("threads", [1, 3, 8])
+@pytest.mark.parametrize("shape", [(517, 4096), (300, 8192), (257, 96)])
+def test_result_does_not_depend_on_how_rows_are_shared(monkeypatch, threads, shape):
+    """Bands of rows per thread, rows per product and the ragged last block change nothing."""
+    from sh_lighting.core import projection
+
+    rng = np.random.default_rng(sum(shape))
+    pixels = rng.random((*shape, 4), dtype=np.float32) * 10.0
+    baseline = project_equirect(pixels, max_order=4)
+    monkeypatch.setattr(projection, "MAX_THREADS", threads)
+    monkeypatch.setattr(projection.os, "sched_getaffinity", lambda _pid: range(threads))
+    assert rel_err(project_equirect(pixels, max_order=4), baseline) < ROUNDING
