@@ -50,7 +50,7 @@ from .scene_data import PROPERTY_NAMES
 GROUP_NAME = "SH Irradiance"
 # Custom property on the node group; its value is the layout version of the tree inside.
 GROUP_MARKER = "sh_lighting_group"
-GROUP_VERSION = 2
+GROUP_VERSION = 3
 FIT_PROPERTY = "sh_lighting_fit"
 
 # (name, in_out, socket type, default value, description), in interface order.
@@ -396,34 +396,34 @@ def _build_nodes(tree, spec):
     terms = tuple(sorted(spec.terms))
     factors = _factors(b, _normal(b, group_in), terms) if any(terms) else {}
 
-    # E = Σ factor_lm L_lm, one (Vector) Math node per kept term; c4 for L00.
+    # E = Σ factor_lm L_lm, one (Vector) Math node per kept term (factor c4 for L00), summed
+    # from L22 back to L00: the usual smaller terms first, the constant c4 L00 last. Of the
+    # orders a node tree can take, this one rounds least on physical lighting (float32 error
+    # ≤ 3.1 u against 5.8 u for index order; tests/core/test_stability.py measures them).
     total = None
     kind = ATTRIBUTE_FAC if spec.scalar else ATTRIBUTE_VECTOR
     new_math = b.math if spec.scalar else b.vector_math
-    for row, index in enumerate(terms):
+    for index in reversed(terms):
         name = COEFFICIENT_NAMES[index]
         attribute = b.node(
             "ShaderNodeAttribute",
             10,
-            row,
+            index,
             name,
             attribute_type="VIEW_LAYER",
             attribute_name=PROPERTY_NAMES[index],
         )
-        value = attribute.outputs[kind]
-        if index == 0:
-            term = new_math("MULTIPLY" if spec.scalar else "SCALE", 11, row, "c4 L00")
-            b.link(value, term.inputs[0])
-            term.inputs[1 if spec.scalar else "Scale"].default_value = C4
-        elif total is None:
-            term = new_math("MULTIPLY", 11, row, f"{name} term")
-            b.link(value, term.inputs[0])
-            b.link(factors[index], term.inputs[1])
+        label = "c4 L00" if index == 0 else f"{name} term"
+        if total is None:
+            term = new_math("MULTIPLY", 11, index, label)
         else:
-            term = new_math("MULTIPLY_ADD", 11, row, f"+ {name} term")
-            b.link(value, term.inputs[0])
-            b.link(factors[index], term.inputs[1])
+            term = new_math("MULTIPLY_ADD", 11, index, f"+ {label}")
             b.link(total, term.inputs[2])
+        b.link(attribute.outputs[kind], term.inputs[0])
+        if index == 0:
+            term.inputs[1].default_value = C4 if spec.scalar else (C4, C4, C4)
+        else:
+            b.link(factors[index], term.inputs[1])
         total = term.outputs[0]
     if total is None:  # nothing kept: E = 0
         total = b.node("ShaderNodeValue", 11, 0, "E = 0").outputs[0]

@@ -126,7 +126,8 @@ def test_group_holds_only_what_the_lighting_needs(rows, kept, scalar, clamp, cou
     if not {"sh_L20", "sh_L22", "sh_L2m2", "sh_L2m1", "sh_L21"} & set(kept):
         assert not [n for n in vector_math if n.label.startswith(("x²", "xy"))]
     if scalar:  # every term and the clamp are Math nodes, fed by the attributes' Fac output
-        terms = [n for n in group.nodes if n.label.startswith(("c4 L00", "+ ", "max"))]
+        labels = ("term", "c4 L00", "max(E, 0)")
+        terms = [n for n in group.nodes if n.label.endswith(labels)]
         assert terms and all(n.bl_idname == "ShaderNodeMath" for n in terms)
         for attribute in (n for n in group.nodes if n.bl_idname == "ShaderNodeAttribute"):
             (link,) = attribute.outputs[2].links
