@@ -127,7 +127,7 @@ def column_sums(pixels, max_order=2, zero_nonfinite=False):
         _band_column_sums(*work[0])
     else:
         with ThreadPoolExecutor(len(work)) as pool:
-            for done in [pool.submit(_band_column_sums, *w) for w in work]:
+            for done in [pool.submit(_quiet_band_column_sums, *w) for w in work]:
                 done.result()
     return sums
 
@@ -139,6 +139,13 @@ def _thread_count(height):
     except AttributeError:  # not Linux
         cores = os.cpu_count() or 1
     return max(1, min(cores, MAX_THREADS, height // ROWS_PER_BLOCK))
+
+
+def _quiet_band_column_sums(*args):
+    """``_band_column_sums`` in a worker thread, which does not inherit the caller's errstate:
+    overflow is checked afterwards (``_combine``), with a clear message."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        _band_column_sums(*args)
 
 
 def _band_column_sums(pixels, weights, sums, r0, r1, zero_nonfinite):

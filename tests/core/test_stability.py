@@ -14,6 +14,7 @@ from functools import partial
 from math import pi, sqrt
 import re
 import tracemalloc
+import warnings
 
 import numpy as np
 import pytest
@@ -242,10 +243,14 @@ def test_values_near_float32_max_stay_finite_and_exact():
     assert c[0] == pytest.approx(2.0 * sqrt(pi) * float(np.finfo(np.float32).max), rel=ROUNDING)
 
 
-def test_coefficients_that_overflow_float64_are_an_error():
-    """1e308 everywhere (finite) has L00 = 2√π·1e308 > float64 max: the core returns inf."""
-    with pytest.raises(ValueError, match="too large|overflow"):
-        project_equirect(np.full((4, 8, 3), 1e308))
+@pytest.mark.parametrize("shape", [(4, 8, 3), (256, 512, 3)])  # one thread, then several
+def test_coefficients_that_overflow_float64_are_an_error(shape):
+    """1e308 everywhere (finite) has L00 = 2√π·1e308 > float64 max: a ValueError, and no
+    RuntimeWarning on the way, from the caller's thread or from a worker thread."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="too large|overflow"):
+            project_equirect(np.full(shape, 1e308))
 
 
 # --------------------------------------------------------------------------------------------
