@@ -49,6 +49,16 @@ def _discard(path):
         pass
 
 
+def _move_into_place(temporary, path, overwrite, what, hint):
+    """The last existence check, then ``os.replace`` of the finished temporary file."""
+    if not overwrite and path.exists():
+        raise FileExistsError(
+            f"{what} '{path}' appeared while it was being written: choose another name, "
+            f"or {hint}"
+        )
+    os.replace(temporary, path)
+
+
 def write_text_atomic(path, text, overwrite=False, what="file", hint="pass overwrite=True"):
     """Write ``text`` (str, UTF-8, ``\\n`` line ends) to ``path`` atomically; returns the Path.
 
@@ -71,12 +81,7 @@ def write_text_atomic(path, text, overwrite=False, what="file", hint="pass overw
             stream.write(data)
             stream.flush()
             os.fsync(stream.fileno())
-        if not overwrite and path.exists():
-            raise FileExistsError(
-                f"{what} '{path}' appeared while it was being written: choose another name, "
-                f"or {hint}"
-            )
-        os.replace(temporary, path)
+        _move_into_place(temporary, path, overwrite, what, hint)
     except BaseException:
         _discard(temporary)
         raise
@@ -100,12 +105,7 @@ def atomic_destination(path, overwrite=False, suffix=".tmp", what="file",
         yield temporary
         if not temporary.is_file():
             raise FileNotFoundError(f"nothing was written for {what} '{path}'")
-        if not overwrite and path.exists():
-            raise FileExistsError(
-                f"{what} '{path}' appeared while it was being written: choose another name, "
-                f"or {hint}"
-            )
-        os.replace(temporary, path)
+        _move_into_place(temporary, path, overwrite, what, hint)
     except BaseException:
         _discard(temporary)
         raise
