@@ -12,24 +12,12 @@ import textwrap
 import bpy
 
 from . import design, panels, previews, scene_data
+from .polls import NO_COEFFICIENTS, coefficients_poll, scene_poll
 
-NO_COEFFICIENTS = "No SH coefficients yet: run Compute from World first"
 WARNING_WIDTH = 44  # characters per line of the wrapped warning
 BASIS_SCALE = 3.0
 IRRADIANCE_SCALE = 7.0
 BAND_LABELS = ("l = 0", "l = 1", "l = 2")
-
-
-def _has_coefficients(cls, context):
-    """Shared poll: a scene with coefficients (else a reason)."""
-    scene = context.scene
-    if scene is None:
-        cls.poll_message_set("No active scene")
-        return False
-    if not scene_data.has_coefficients(scene):
-        cls.poll_message_set(NO_COEFFICIENTS)
-        return False
-    return True
 
 
 class _Edit:
@@ -39,7 +27,7 @@ class _Edit:
 
     @classmethod
     def poll(cls, context):
-        return _has_coefficients(cls, context)
+        return coefficients_poll(cls, context)
 
     def execute(self, context):
         try:
@@ -239,11 +227,9 @@ class SHLIGHT_OT_split_sun(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        scene = context.scene
-        if scene is None:
-            cls.poll_message_set("No active scene")
+        if not scene_poll(cls, context):
             return False
-        if scene.world is None:
+        if context.scene.world is None:
             cls.poll_message_set("The scene has no world: give it an HDR image first")
             return False
         return True

@@ -11,6 +11,7 @@ import time
 import bpy
 
 from . import materials, nodes, properties, scene_data, world_cache
+from .polls import coefficients_poll, scene_poll
 from .preferences import ADDON_ID
 
 
@@ -43,10 +44,9 @@ def _skip_reasons(result, limit=3):
 
 def _target_poll(cls, context):
     """Shared poll of Apply and Remove: a scene with settings and something to act on."""
-    scene = context.scene
-    if scene is None:
-        cls.poll_message_set("No active scene")
+    if not scene_poll(cls, context):
         return False
+    scene = context.scene
     target = scene.sh_lighting.apply_target
     if target == "SELECTED" and not context.selected_objects:
         cls.poll_message_set("No objects selected: select objects or set Apply To to All")
@@ -66,10 +66,7 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if context.scene is None:
-            cls.poll_message_set("No active scene")
-            return False
-        return True
+        return scene_poll(cls, context)
 
     def execute(self, context):
         scene = context.scene
@@ -105,8 +102,7 @@ class SHLIGHT_OT_reset(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if context.scene is None:
-            cls.poll_message_set("No active scene")
+        if not scene_poll(cls, context):
             return False
         if scene_data.COMPUTED_PROPERTY not in context.scene:
             cls.poll_message_set("Nothing to reset to: run Compute from World first")
@@ -135,12 +131,7 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if not _target_poll(cls, context):
-            return False
-        if not scene_data.has_coefficients(context.scene):
-            cls.poll_message_set("No SH coefficients yet: run Compute from World first")
-            return False
-        return True
+        return _target_poll(cls, context) and coefficients_poll(cls, context)
 
     def execute(self, context):
         scene = context.scene
@@ -205,8 +196,7 @@ class SHLIGHT_OT_refit(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if context.scene is None:
-            cls.poll_message_set("No active scene")
+        if not scene_poll(cls, context):
             return False
         if nodes.find_node_group() is None:
             cls.poll_message_set("No SH Irradiance node group yet: Apply to materials first")

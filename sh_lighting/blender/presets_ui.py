@@ -35,7 +35,8 @@ from bpy.props import BoolProperty, EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ..core.presets import PresetError
-from . import panels, preset_io, scene_data
+from . import panels, preset_io
+from .polls import coefficients_poll, scene_poll
 
 LOAD = "shlight.load_preset"
 ADD = "shlight.preset_add"
@@ -60,20 +61,10 @@ FORMAT_ITEMS = tuple(
 KNOWN_EXTENSIONS = {ext for _label, ext in preset_io.FORMATS.values()}
 
 
-def _scene_poll(cls, context):
-    if context.scene is None:
-        cls.poll_message_set("No active scene")
-        return False
-    return True
-
-
 def _coefficients_poll(cls, context):
-    if not _scene_poll(cls, context):
-        return False
-    if not scene_data.has_coefficients(context.scene):
-        cls.poll_message_set("No SH coefficients yet: run Compute from World or load a preset")
-        return False
-    return True
+    return coefficients_poll(
+        cls, context, "No SH coefficients yet: run Compute from World or load a preset"
+    )
 
 
 def display_name(name, shipped):
@@ -114,7 +105,7 @@ class SHLIGHT_OT_load_preset(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return _scene_poll(cls, context)
+        return scene_poll(cls, context)
 
     def execute(self, context):
         return load_preset_file(self, context.scene, self.filepath)
@@ -132,7 +123,7 @@ class SHLIGHT_OT_import_preset(bpy.types.Operator, ImportHelper):
 
     @classmethod
     def poll(cls, context):
-        return _scene_poll(cls, context)
+        return scene_poll(cls, context)
 
     def execute(self, context):
         return load_preset_file(self, context.scene, self.filepath)
