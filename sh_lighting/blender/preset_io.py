@@ -75,11 +75,15 @@ def shipped_preset_dir():
     return None
 
 
-def user_preset_dir(create=False):
-    """Blender's user preset folder of this add-on: ``<user scripts>/presets/sh_lighting``."""
-    return Path(
-        bpy.utils.user_resource("SCRIPTS", path=f"presets/{PRESET_SUBDIR}", create=create)
-    )
+def user_preset_dir():
+    """Blender's user preset folder of this add-on, ``<user scripts>/presets/sh_lighting``
+    (it may not exist yet), or None if Blender gives no absolute user scripts folder: an empty
+    path would otherwise be the current working directory.
+    """
+    folder = bpy.utils.user_resource("SCRIPTS", path=f"presets/{PRESET_SUBDIR}")
+    if not folder or not os.path.isabs(folder):
+        return None
+    return Path(folder)
 
 
 def _json_files(folder):
@@ -232,23 +236,31 @@ def save_user_preset(scene, name, overwrite=False):
     """Save ``scene``'s coefficients as the user preset ``name``; returns the Path.
 
     The file is ``user_preset_dir() / preset_file_name(name)`` (the folder is created);
-    FileExistsError if it exists and ``overwrite`` is false.
+    FileExistsError if it exists and ``overwrite`` is false; OSError if Blender gives no user
+    preset folder or it cannot be created (nothing is written anywhere else).
     """
     file_name = preset_file_name(name)
-    folder = user_preset_dir(create=True)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = user_preset_dir()
+    if folder is None:
+        raise OSError(
+            "Blender gives no user scripts folder, so there is nowhere to save user presets: "
+            "export the preset to a file instead"
+        )
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise OSError(f"cannot create the user preset folder '{folder}': {error}") from error
     return export_preset(
         scene, folder / file_name, "sh_lighting", overwrite, {"name": name.strip()}
     )
 
 
-def _user_preset_path(name):
-    """The file of user preset ``name``: its exact file stem if such a file exists (files put
-    there by hand may have any name), else the sanitised name."""
-    folder = user_preset_dir()
+def _user_preset_path(folder, name):
+    """The file of user preset ``name`` in ``folder``: its exact file stem if such a file
+    exists (files put there by hand may have any name), else the sanitised name."""
     if (
         isinstance(name, str) and name and not name.startswith(".")
-        and os.path.basename(name) == name and name not in (".", "..")
+        and os.path.basename(name) == name
     ):
         exact = folder / (name + PRESET_EXTENSION)
         if exact.is_file():
@@ -263,14 +275,15 @@ def remove_user_preset(name):
     FileNotFoundError if there is no such user preset; PermissionError for a shipped preset
     (shipped presets are never deleted).
     """
-    path = _user_preset_path(name)
-    shipped = shipped_preset_dir()
-    refusal = PermissionError(f"'{name}' is a shipped preset: shipped presets cannot be removed")
-    if shipped is not None and path.resolve().parent == shipped.resolve():
-        raise refusal
-    if not path.is_file():
-        if name in shipped_presets() or Path(preset_file_name(name)).stem in shipped_presets():
-            raise refusal
-        raise FileNotFoundError(f"there is no user preset '{name}' in '{path.parent}'")
+    folder = user_preset_dir()
+    path = None if folder is None else _user_preset_path(folder, name)
+    if path is None or not path.is_file():
+        shipped = shipped_presets()
+        if name in shipped or Path(preset_file_name(name)).stem in shipped:
+            raise PermissionError(
+                f"'{name}' is a shipped preset: shipped presets cannot be removed"
+            )
+        where = f"in '{folder}'" if folder is not None else "(Blender gives no user folder)"
+        raise FileNotFoundError(f"there is no user preset '{name}' {where}")
     path.unlink()
     return path

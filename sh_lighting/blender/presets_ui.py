@@ -9,11 +9,11 @@ follows Blender's conventions without executing anything:
 
 * ``SHLIGHT_MT_presets`` lists the shipped presets (the package's ``presets`` folder) and, under
   them, the user's presets from Blender's user preset folder
-  (``<user scripts>/presets/sh_lighting``, the folder ``preset_subdir`` names, as for
-  Blender's presets); each entry runs ``shlight.load_preset`` with the file's path, and the
-  menu's label becomes the name of the last preset loaded (what ``script.execute_preset``
-  does). User entries have a "−" button (``shlight.preset_remove``, with a confirmation);
-  shipped presets have none and ``preset_io.remove_user_preset`` refuses them anyway.
+  (``<user scripts>/presets/sh_lighting``, beside Blender's own presets); each entry runs
+  ``shlight.load_preset`` with the file's path, and the menu's label becomes the name of the
+  last preset loaded (what ``script.execute_preset`` does). User entries have a "−" button
+  (``shlight.preset_remove``, with a confirmation); shipped presets have none and
+  ``preset_io.remove_user_preset`` refuses them anyway.
 * "+" (``shlight.preset_add``) saves the current coefficients as a user preset under a
   sanitised file name (``preset_io.preset_file_name``), refusing to replace one unless
   Overwrite is ticked.
@@ -29,6 +29,7 @@ sidebar).
 """
 
 import os
+from pathlib import Path
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, StringProperty
@@ -84,7 +85,9 @@ def load_preset_file(operator, scene, path):
         operator.report({"ERROR"}, f"Preset not loaded, nothing changed: {error}")
         return {"CANCELLED"}
     name = os.path.splitext(os.path.basename(path))[0]
-    SHLIGHT_MT_presets.bl_label = bpy.path.display_name(name, has_ext=False, title_case=False)
+    shipped_dir = preset_io.shipped_preset_dir()
+    shipped = shipped_dir is not None and Path(path).resolve().parent == shipped_dir.resolve()
+    SHLIGHT_MT_presets.bl_label = display_name(name, shipped)
     operator.report({"INFO"}, f"Loaded SH lighting preset '{name}'")
     return {"FINISHED"}
 
@@ -275,8 +278,6 @@ def draw_preset_menu(layout):
 class SHLIGHT_MT_presets(bpy.types.Menu):
     # The label is replaced by the name of the last preset loaded, as in Blender's preset menus.
     bl_label = "Presets"
-    preset_subdir = preset_io.PRESET_SUBDIR
-    preset_operator = LOAD
 
     def draw(self, _context):
         draw_preset_menu(self.layout)

@@ -88,6 +88,10 @@ def test_zip_holds_manifest_and_package(built_zip):
     assert "__init__.py" in names
     assert "core/equirect.py" in names
     assert "blender/preferences.py" in names
+    # The shipped presets, where preset_io.shipped_preset_dir looks once installed.
+    assert "presets/forest.json" in names
+    shipped = {f"presets/{p.name}" for p in (package.ROOT / "presets").glob("*.json")}
+    assert len(shipped) >= 11 and shipped <= names
     assert not any("__pycache__" in name or name.endswith(".pyc") for name in names)
 
 

@@ -134,8 +134,6 @@ def test_import_keeps_the_reset_values(scene, tmp_path):
     assert_array_equal(scene_data.get_computed(scene), OTHER)
 
 
-
-
 def test_metadata_names_the_world_image_while_the_values_are_the_computed_ones(addon, tmp_path):
     scene = bpy.context.scene
     exr = write_constant_exr(tmp_path / "sky.exr", (0.5, 1.0, 2.0))
@@ -220,13 +218,20 @@ def test_export_without_coefficients_is_refused_with_a_reason(addon, tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def _forest_with_nan():
+    """forest.json with its first L00 value replaced by NaN (what json.dumps writes for it)."""
+    data = json.loads((ROOT / "presets" / "forest.json").read_text())
+    data["coefficients"]["L00"][0] = math.nan
+    return json.dumps(data)
+
+
 MALFORMED = {
     "not_json": '{"format": "sh_lighting.preset", ',
     "missing_coefficient": json.dumps({
         "format": "sh_lighting.preset", "version": 1, "frame": "blender_world_z_up",
         "coefficients": {f"L{i}": [0, 0, 0] for i in range(8)},
     }),
-    "nan": (ROOT / "presets" / "forest.json").read_text().replace("2.683844696604473", "NaN"),
+    "nan": _forest_with_nan(),
     "other_frame": (ROOT / "presets" / "forest.json").read_text().replace(
         "blender_world_z_up", "gltf_y_up"),
     "three_js_file": json.dumps({"sh": list(range(27))}),
@@ -263,7 +268,7 @@ def test_shipped_presets_are_listed_and_load(scene):
     path = shipped["forest"]
     assert bpy.ops.shlight.load_preset(filepath=str(path)) == {"FINISHED"}
     assert_array_equal(scene_data.get_coefficients(scene), read_preset(path)[0])
-    assert presets_ui.SHLIGHT_MT_presets.bl_label == "forest"
+    assert presets_ui.SHLIGHT_MT_presets.bl_label == "Forest"  # shipped names are title-cased
 
 
 def test_package_ships_the_presets_where_preset_io_looks(tmp_path, monkeypatch):
@@ -302,6 +307,8 @@ def test_a_preset_dropped_in_by_hand_keeps_its_name_and_can_be_removed(scene, us
     user_dir.mkdir(parents=True)
     path = write_preset(user_dir / "Sky blue.json", KNOWN)
     assert preset_io.user_presets() == {"Sky blue": path}
+    assert bpy.ops.shlight.load_preset(filepath=str(path)) == {"FINISHED"}
+    assert presets_ui.SHLIGHT_MT_presets.bl_label == "Sky blue"  # user names keep their case
     assert preset_io.remove_user_preset("Sky blue") == path
     assert not path.exists()
 
@@ -313,6 +320,37 @@ def test_shipped_presets_cannot_be_removed(scene, user_dir):
     with pytest.raises(PermissionError):
         preset_io.remove_user_preset("forest")
     assert shipped.is_file()
+
+
+@pytest.mark.parametrize(
+    "resource", ["", os.path.join("presets", "sh_lighting")], ids=["empty", "relative"]
+)
+def test_no_user_folder_from_blender_writes_nothing_in_the_working_directory(
+    scene, tmp_path, monkeypatch, resource
+):
+    """``user_resource`` gives "" when it fails; that (or any relative path) is no folder, not
+    the working directory: nothing is listed, saved or removed there."""
+    monkeypatch.chdir(tmp_path)
+    decoy = write_preset(tmp_path / "Late_Sun.json", OTHER)  # what "." would hold
+    monkeypatch.setattr(bpy.utils, "user_resource", lambda *args, **kwargs: resource)
+    assert preset_io.user_preset_dir() is None
+    assert preset_io.user_presets() == {}
+    with pytest.raises(OSError, match="no user scripts folder"):
+        preset_io.save_user_preset(scene, "Late Sun", overwrite=True)
+    with pytest.raises(RuntimeError, match="Preset not saved: .*no user scripts folder"):
+        bpy.ops.shlight.preset_add(name="Late Sun", overwrite=True)
+    with pytest.raises(FileNotFoundError, match="no user preset"):
+        preset_io.remove_user_preset("Late_Sun")
+    assert list(tmp_path.iterdir()) == [decoy]
+    assert_array_equal(read_preset(decoy)[0], OTHER)
+
+
+def test_a_user_folder_that_cannot_be_created_is_a_clear_error(scene, user_dir):
+    user_dir.parent.mkdir(parents=True)
+    user_dir.write_text("a file where the folder should be")
+    with pytest.raises(OSError, match="cannot create the user preset folder"):
+        preset_io.save_user_preset(scene, "Late Sun")
+    assert user_dir.read_text() == "a file where the folder should be"
 
 
 # --- the menu and panels -------------------------------------------------------------------
@@ -350,10 +388,11 @@ def test_menu_lists_shipped_then_user_presets_with_remove_buttons(scene, user_di
              if op == presets_ui.LOAD]
     removes = [props.name for kind, op, text, props in layout.log if op == presets_ui.REMOVE]
     shipped = preset_io.shipped_presets()
-    assert loads[: len(shipped)] == [
-        (bpy.path.display_name(name, has_ext=False), str(path)) for name, path in shipped.items()
+    assert [text for text, _path in loads[: len(shipped)]] == [
+        "City", "Courtyard", "Eucalyptus Grove", "Forest", "Grace Cathedral", "Interior",
+        "Night", "St Peters Basilica", "Studio", "Sunrise", "Sunset",
     ]
-    assert ("Grace Cathedral", str(shipped["grace_cathedral"])) in loads
+    assert [path for _text, path in loads[: len(shipped)]] == [str(p) for p in shipped.values()]
     assert loads[len(shipped):] == [("Late Sun", str(user_dir / "Late_Sun.json"))]
     assert removes == ["Late_Sun"]  # never one for a shipped preset
     assert any(op == presets_ui.ADD for _kind, op, _text, _props in layout.log)
@@ -369,7 +408,9 @@ def test_operators_that_change_the_scene_are_undoable_and_file_ones_are_not(addo
     for idname in (presets_ui.EXPORT, presets_ui.ADD, presets_ui.REMOVE):
         assert "UNDO" not in getattr(bpy.ops.shlight, idname.split(".")[1]).bl_options
     for cls in presets_ui.classes:
-        assert cls.is_registered and (cls.__doc__ or cls.bl_label), cls.__name__
+        assert cls.is_registered, cls.__name__
+        if issubclass(cls, bpy.types.Operator):
+            assert cls.__doc__, cls.__name__  # the operator's tooltip
 
 
 def test_presets_sub_panels_sit_under_both_main_panels(addon):
