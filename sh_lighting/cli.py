@@ -84,33 +84,24 @@ def coefficient_table(coeffs):
     return lines
 
 
-def spread_normals(count=ERROR_NORMALS):
-    """``count`` near-uniform unit vectors (a Fibonacci lattice), the same on every run."""
-    import numpy as np
-
-    k = np.arange(count) + 0.5
-    z = 1.0 - 2.0 * k / count
-    phi = np.pi * (1.0 + 5.0**0.5) * k
-    r = np.sqrt(1.0 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
-
-
 def error_estimate(pixels, coeffs, count=ERROR_NORMALS):
     """{"mean", "max"} 9-term irradiance error / total power ∫L dω, or None (no power).
 
-    The paper's measure: |E9 − E| over ``count`` normals, divided per channel by the channel's
-    power 2√π L00; mean is the worst channel's mean, max the largest over normals and channels.
+    The paper's measure (``core.irradiance.relative_error``): |E9 − E| at ``count`` normals
+    (``spread_normals``), divided per channel by the channel's power 2√π L00; mean is the worst
+    channel's mean, max the largest over normals and channels.
     """
-    import numpy as np
+    from .core.irradiance import irradiance, reference_irradiance, relative_error, total_power
+    from .core.sh import spread_normals
 
-    from .core.irradiance import irradiance, reference_irradiance
-
-    power = coeffs[0] * 2.0 * np.sqrt(np.pi)
+    power = total_power(coeffs)
     if not (power > 0.0).all():
         return None
     normals = spread_normals(count)
-    err = np.abs(irradiance(coeffs, normals) - reference_irradiance(pixels, normals)) / power
-    return {"mean": float(err.mean(axis=0).max()), "max": float(err.max())}
+    mean, largest = relative_error(
+        irradiance(coeffs, normals), reference_irradiance(pixels, normals), power
+    )
+    return {"mean": mean, "max": largest}
 
 
 def hdri_coefficients(path):

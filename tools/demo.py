@@ -10,13 +10,14 @@ the 9-term irradiance map with the brute-force one (the paper's figure 3) under 
 import json
 import sys
 import time
-from math import pi, sqrt
+from math import pi
 from pathlib import Path
 
 import bpy
 import numpy as np
 
 from sh_lighting.blender.images import load_image_pixels
+from sh_lighting.cli import coefficient_table
 from sh_lighting.core import (
     COEFFICIENT_NAMES,
     irradiance,
@@ -24,20 +25,11 @@ from sh_lighting.core import (
     reference_irradiance,
     texel_directions,
 )
-from tools.png import srgb_encode, write_png
+from sh_lighting.core.irradiance import relative_error, total_power
+from sh_lighting.core.preview import linear_to_srgb
+from tools.png import write_png
 
 OUT = Path(__file__).resolve().parent.parent / "out" / "demo"
-MEANING = (
-    "ambient: overall brightness",
-    "light from +Y vs -Y",
-    "light from above (+) vs below (-)",
-    "light from +X vs -X",
-    "diagonal X-Y quadrants",
-    "Y-Z quadrants (tilted front/back)",
-    "top and bottom vs horizon",
-    "X-Z quadrants (tilted left/right)",
-    "X axis vs Y axis",
-)
 MAP_SIZE = (32, 64)  # irradiance maps compared with brute force (rows, columns)
 
 
@@ -46,12 +38,6 @@ def timed(label, timings, function, *args):
     result = function(*args)
     timings.append((label, time.perf_counter() - start))
     return result
-
-
-def print_table(coeffs):
-    print(f"\n{'':5} {'R':>10} {'G':>10} {'B':>10}   what it does")
-    for name, rgb, meaning in zip(COEFFICIENT_NAMES, coeffs, MEANING):
-        print(f"{name:5} {rgb[0]:10.4f} {rgb[1]:10.4f} {rgb[2]:10.4f}   {meaning}")
 
 
 def thumbnail(pixels, shape):
@@ -68,7 +54,7 @@ def comparison_picture(hdri, sh_map, brute_map, scale=4):
     error = np.abs(sh_map - brute_map) * 10.0
     panels = [hdri / np.percentile(hdri, 99), gap, sh_map / peak, gap, brute_map / peak, gap,
               error / peak]
-    picture = srgb_encode(np.concatenate(panels, axis=1))
+    picture = linear_to_srgb(np.concatenate(panels, axis=1))
     return np.repeat(np.repeat(picture, scale, axis=0), scale, axis=1)
 
 
@@ -79,20 +65,20 @@ def main(argv):
     pixels = timed("load image (decode + readback)", timings, load_image_pixels, path)
     coeffs = timed("project to 9 SH coefficients", timings, project_equirect, pixels)
     print(f"HDRI: {path} ({pixels.shape[1]}x{pixels.shape[0]})")
-    print("Lighting coefficients L_lm (Blender world axes, z up):")
-    print_table(coeffs)
+    print("Lighting coefficients L_lm (Blender world axes, z up):\n")
+    print("\n".join(coefficient_table(coeffs)))
 
     normals = texel_directions(*MAP_SIZE).reshape(-1, 3)
-    sh_map = timed("evaluate E(n) by eq. 13 at 2048 normals", timings, irradiance, coeffs, normals)
-    brute = timed("brute-force E(n) at 2048 normals", timings, reference_irradiance, pixels, normals)
-    power = coeffs[0] * 2.0 * sqrt(pi)  # ∫ L dω per channel
-    err = np.abs(sh_map - brute) / power
+    at = f"at {len(normals)} normals"
+    sh_map = timed(f"evaluate E(n) by eq. 13 {at}", timings, irradiance, coeffs, normals)
+    brute = timed(f"brute-force E(n) {at}", timings, reference_irradiance, pixels, normals)
+    mean, largest = relative_error(sh_map, brute, total_power(coeffs))
     print("\nTimings:")
     for label, seconds in timings:
         print(f"  {label:42s} {1000 * seconds:9.1f} ms")
     print(
         "\n9-term irradiance error, as a fraction of the total light ∫L dω (the paper's measure):\n"
-        f"  mean {100 * err.mean(axis=0).max():.2f} %, max {100 * err.max():.2f} % "
+        f"  mean {100 * mean:.2f} %, max {100 * largest:.2f} % "
         "(paper: under 1 % mean and 5 % max for natural light probes; 9.4 % worst case)"
     )
 

@@ -7,7 +7,8 @@ Usage: python -m tools.make_presets [--no-hdri]
   Blender's by an exact SH rotation (``frames.paper_to_blender``). Needs numpy only.
 * The 8 HDRIs that ship with Blender (studiolights/world: city, courtyard, forest, interior,
   night, studio, sunrise, sunset), projected exactly with ``project_equirect``, each with its
-  9-term error estimate against the exact irradiance (``reference_irradiance``) at 512 normals.
+  9-term error estimate against the exact irradiance (``reference_irradiance``) at 512 normals
+  (``sh_lighting.cli.error_estimate``, the same measure as ``compute``).
   Needs the ``bpy`` module; skipped with ``--no-hdri``.
 
 Existing preset files are replaced. The files carry no creation date, so regenerating them
@@ -16,7 +17,6 @@ gives the same bytes when the inputs have not changed.
 
 import json
 import sys
-from math import pi, sqrt
 from pathlib import Path
 
 import numpy as np
@@ -56,33 +56,15 @@ def figure2_presets(path=FIGURE2):
     return out
 
 
-def spread_normals(count=ERROR_NORMALS):
-    """``count`` near-uniform unit vectors (a Fibonacci lattice), fixed for reproducibility."""
-    k = np.arange(count) + 0.5
-    z = 1.0 - 2.0 * k / count
-    phi = pi * (1.0 + 5.0**0.5) * k
-    r = np.sqrt(1.0 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
-
-
-def error_estimate(pixels, coeffs, normals):
-    """9-term irradiance error / total power ∫L dω: worst channel's mean, and the max."""
-    from sh_lighting.core import irradiance, reference_irradiance
-
-    power = coeffs[0] * 2.0 * sqrt(pi)  # ∫ L dω per channel
-    err = np.abs(irradiance(coeffs, normals) - reference_irradiance(pixels, normals)) / power
-    return {"mean": float(err.mean(axis=0).max()), "max": float(err.max())}
-
-
 def hdri_presets():
     """{file stem: (coefficients, metadata)} for the 8 HDRIs that ship inside bpy."""
     import bpy
 
     from sh_lighting.blender.images import load_image_pixels
+    from sh_lighting.cli import error_estimate
     from sh_lighting.core import project_equirect
 
     folder = Path(bpy.utils.system_resource("DATAFILES", path="studiolights/world"))
-    normals = spread_normals()
     out = {}
     for name in HDRI_NAMES:
         pixels = load_image_pixels(folder / f"{name}.exr")
@@ -94,11 +76,11 @@ def hdri_presets():
                 "source": f"Blender datafiles: studiolights/world/{name}.exr",
                 "mapping": [0.0, 0.0, 0.0],
                 "strength": 1.0,
-                "error_estimate": error_estimate(pixels, coeffs, normals),
+                "error_estimate": error_estimate(pixels, coeffs, ERROR_NORMALS),
                 "notes": (
                     f"Projected exactly from the {pixels.shape[1]}x{pixels.shape[0]} EXR "
                     f"bundled with Blender {bpy.app.version_string}; error estimate at "
-                    f"{len(normals)} normals against the exact irradiance."
+                    f"{ERROR_NORMALS} normals against the exact irradiance."
                 ),
             },
         )

@@ -6,14 +6,11 @@ import zlib
 import numpy as np
 
 
-def srgb_encode(linear):
-    """Linear [0, 1] → sRGB-encoded [0, 1] (IEC 61966-2-1)."""
-    x = np.clip(linear, 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-
-
 def write_png(path, rgb):
-    """Write an (H, W, 3) array of sRGB-encoded values in [0, 1], rows top to bottom."""
+    """Write an (H, W, 3) array of sRGB-encoded values in [0, 1], rows top to bottom.
+
+    Encode linear values first with ``sh_lighting.core.preview.linear_to_srgb``.
+    """
     data = (np.clip(rgb, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
     h, w, _ = data.shape
     raw = b"".join(b"\x00" + data[row].tobytes() for row in range(h))

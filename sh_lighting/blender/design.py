@@ -20,12 +20,12 @@ from mathutils import Matrix
 from ..core import edits, windowing
 from ..core.minimum import irradiance_minimum, negative_light_warning
 from ..core.rotation import rotate_coefficients
+from ..core.sh import spread_normals
 from ..core.sun import detect_sun, remove_sun
 from ..core.world_map import (
     map_coefficients,
     map_irradiance,
     mapping_rotation,
-    spread_normals,
     sun_light_rotation,
     to_world_direction,
 )

@@ -15,18 +15,9 @@ function returns new float64 coefficients of the same shape (Blender world axes,
 
 import numpy as np
 
-from .irradiance import check_coefficients
+from .irradiance import C4, TERM_PEAKS, check_coefficients
 from .rotation import rotate_coefficients
-from .sh import (
-    COEFFICIENT_NAMES,
-    Y1,
-    Y2_XY,
-    Y00,
-    Y20,
-    Y22,
-    band_of_each_coefficient,
-    lambert_band_factors,
-)
+from .sh import COEFFICIENT_NAMES, band_of_each_coefficient
 
 # Rec. 709 / sRGB luminance weights (they sum to 1, so grey keeps the luminance).
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
@@ -123,9 +114,6 @@ def flip_vertical(coeffs):
     return c * vertical_parity(order)[:, None]
 
 
-# Peak of |Y_lm| over the sphere (eq. 3): y, z, x reach 1; xy, yz, xz reach 1/2;
-# 3z² − 1 reaches 2 (at the poles); x² − y² reaches 1.
-_PEAK = np.array([Y00, Y1, Y1, Y1, Y2_XY / 2, Y2_XY / 2, 2 * Y20, Y2_XY / 2, Y22])
 _WORDS = (
     None,
     ("lit from +Y", "lit from −Y", "no ±Y difference"),
@@ -150,16 +138,16 @@ def describe_coefficients(coeffs):
     "L10 +0.42: lit from above (±50 % of the mean)".
 
     Uses the luminance (Rec. 709) of each RGB coefficient. Each term's effect is measured as
-    the most it adds to or removes from E(n) (Â_l |L_lm| max|Y_lm|, eq. 6) relative to the mean
-    irradiance c4 L00 = Â_0 L00 Y00: below 2 % it is called negligible, below 10 % slight.
+    the most it adds to or removes from E(n) (Â_l |L_lm| max|Y_lm| = ``TERM_PEAKS`` · |L_lm|,
+    eq. 6 and 13) relative to the mean irradiance c4 L00 = Â_0 L00 Y00: below 2 % it is called
+    negligible, below 10 % slight.
     Axes are Blender's: z up; the front view looks along +Y.
     """
     c, order = check_coefficients(coeffs)
     if order != 2:
         raise ValueError(f"descriptions need the 9 coefficients of order 2, got order {order}")
     lum = c @ LUMINANCE
-    a = lambert_band_factors(2)[band_of_each_coefficient(2)]
-    mean = a[0] * lum[0] * Y00
+    mean = C4 * lum[0]
     lines = []
     if mean > 0.0:
         lines.append(f"L00 {lum[0]:+.3g}: overall light (mean irradiance {mean:.3g})")
@@ -168,7 +156,7 @@ def describe_coefficients(coeffs):
     for k in range(1, 9):
         name = f"{COEFFICIENT_NAMES[k]} {lum[k]:+.3g}"
         positive, negative, neutral = _WORDS[k]
-        effect = a[k] * abs(lum[k]) * _PEAK[k] / mean if mean > 0.0 else np.inf
+        effect = TERM_PEAKS[k] * abs(lum[k]) / mean if mean > 0.0 else np.inf
         if effect < NEGLIGIBLE:
             lines.append(f"{name}: {neutral}")
             continue

@@ -48,6 +48,13 @@ def describe_nonfinite(pixels, limit=5):
     return len(rows), f"{len(rows)} non-finite (NaN or Inf) texels at {where}{more}"
 
 
+def check_finite_pixels(pixels):
+    """``pixels`` unchanged, or a ValueError counting and locating its NaN/Inf RGB texels."""
+    if not np.isfinite(pixels[..., :3]).all():
+        raise ValueError(f"pixels contain {describe_nonfinite(pixels)[1]}: repair the image first")
+    return pixels
+
+
 def row_edges(height):
     """θ at the H + 1 row boundaries, top (θ = 0) to bottom (θ = π)."""
     return np.linspace(0.0, pi, height + 1)
@@ -73,9 +80,13 @@ def texel_solid_angles(height, width):
     return (2.0 * pi / width) * 2.0 * np.sin(row_centres(height)) * np.sin(half)
 
 
-def texel_directions(height, width):
-    """Unit direction of each texel centre, shape (H, W, 3), rows top to bottom."""
-    theta = row_centres(height)[:, None]
+def texel_directions(height, width, rows=slice(None)):
+    """Unit direction of each texel centre, shape (H, W, 3), rows top to bottom.
+
+    ``rows``: a slice of the rows to compute, e.g. ``slice(r0, r1)`` gives
+    ``texel_directions(height, width)[r0:r1]`` without computing the other rows.
+    """
+    theta = row_centres(height)[rows, None]
     phi = column_centres(width)[None, :]
     sin_t = np.sin(theta)
     return np.stack(

@@ -15,7 +15,7 @@ from math import pi, sqrt
 
 import numpy as np
 
-from .equirect import check_pixels, describe_nonfinite, texel_directions, texel_solid_angles
+from .equirect import check_finite_pixels, check_pixels, texel_directions, texel_solid_angles
 from .sh import band_of_each_coefficient, lambert_band_factors, order_of, sh_basis
 
 # Eq. 13's constants, in closed form (the paper prints them rounded to 6 digits).
@@ -25,6 +25,13 @@ C2 = 0.5 * A1 * sqrt(3.0 / (4.0 * pi))  # 0.511664
 C3 = 3.0 * A2 * 0.25 * sqrt(5.0 / pi)  # 0.743125
 C4 = A0 * 0.5 * sqrt(1.0 / pi)  # 0.886227
 C5 = A2 * 0.25 * sqrt(5.0 / pi)  # 0.247708
+
+# Largest |constant × polynomial| over the unit sphere of each term of eq. 13 (c4; 2 c2 for
+# y, z, x; c1 for 2xy, 2yz, 2xz and x² − y²; c3 − c5 = 2 c5 for c3 z² − c5; table in
+# ``pruning``): TERM_PEAKS[i] · |L_i| is the most term i adds to or removes from E(n) anywhere.
+TERM_PEAKS = np.array(
+    [C4, 2.0 * C2, 2.0 * C2, 2.0 * C2, C1, C1, max(abs(-C5), abs(C3 - C5)), C1, C1]
+)
 
 # Texel directions times normals are computed in chunks of about this many float64 values.
 CHUNK_VALUES = 1 << 22
@@ -97,8 +104,7 @@ def reference_irradiance(pixels, normals):
     """
     a = check_pixels(pixels)
     n = _check_normals(normals)
-    if not np.isfinite(a[..., :3]).all():
-        raise ValueError(f"pixels contain {describe_nonfinite(a)[1]}: repair the image first")
+    check_finite_pixels(a)
     height, width, _ = a.shape
     flat_n = n.reshape(-1, 3)
     radiance = a[..., :3].astype(np.float64) * texel_solid_angles(height, width)[:, None, None]
@@ -110,3 +116,31 @@ def reference_irradiance(pixels, normals):
         np.maximum(cosines, 0.0, out=cosines)
         result += cosines @ radiance[r0 : r0 + rows].reshape(-1, 3)
     return result.reshape(n.shape[:-1] + (3,))
+
+
+def total_power(coeffs):
+    """P = ∫ L dω of each channel, (3,): L00 / Y00 = 2√π L00."""
+    c, _ = check_coefficients(coeffs)
+    return 2.0 * sqrt(pi) * c[0]
+
+
+def error_over_power(estimate, reference, power):
+    """|E − E_ref| / P per normal and channel: the paper's error measure.
+
+    Ramamoorthi and Hanrahan (2001) give the 9-term irradiance error as a fraction of the total
+    light P = ∫ L dω (``total_power``; REFERENCE.md §2: at most 3/32 anywhere and 0.0307 on
+    average for non-negative lighting). ``estimate``, ``reference``: (N, 3) irradiance at the
+    same normals; ``power``: (3,). A channel with P ≤ 0 is refused (ValueError).
+    """
+    p = np.asarray(power, dtype=np.float64)
+    if np.any(p <= 0.0):
+        raise ValueError("a channel has total power ≤ 0 (L00 ≤ 0): relative errors are undefined")
+    return np.abs(np.asarray(estimate, dtype=np.float64) - reference) / p
+
+
+def relative_error(estimate, reference, power):
+    """(mean, max) of ``error_over_power``: the worst channel's mean over the normals, and the
+    largest value over normals and channels, as floats (the paper's mean and max error).
+    """
+    err = error_over_power(estimate, reference, power)
+    return float(err.mean(axis=0).max()), float(err.max())

@@ -42,14 +42,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .irradiance import C1, C2, C3, C4, C5, irradiance
+# TERM_PEAKS: largest |constant × polynomial| of each term over the unit sphere (table above).
+from .irradiance import C4, TERM_PEAKS, irradiance
 from .minimum import irradiance_maximum, irradiance_minimum
 from .sh import COEFFICIENT_NAMES
 
-# Largest |constant × polynomial| of each term over the unit sphere (table above), closed form.
-TERM_PEAKS = np.array(
-    [C4, 2.0 * C2, 2.0 * C2, 2.0 * C2, C1, C1, max(abs(-C5), abs(C3 - C5)), C1, C1]
-)
 # The terms of each band (l = 0, 1, 2) by index l(l+1)+m.
 BANDS = ((0,), (1, 2, 3), (4, 5, 6, 7, 8))
 ALL_TERMS = tuple(range(9))

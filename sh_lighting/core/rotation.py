@@ -9,16 +9,7 @@ sampling error: both sides are the same degree-l polynomial).
 
 import numpy as np
 
-from .sh import num_coefficients, sh_basis
-
-
-def _spread_directions(count):
-    """``count`` near-uniform unit vectors (a Fibonacci lattice), fixed for reproducibility."""
-    k = np.arange(count) + 0.5
-    z = 1.0 - 2.0 * k / count
-    phi = np.pi * (1.0 + 5.0**0.5) * k
-    r = np.sqrt(1.0 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+from .sh import num_coefficients, order_of, sh_basis, spread_normals
 
 
 def check_rotation(rotation):
@@ -35,7 +26,7 @@ def sh_rotation_matrix(rotation, max_order=2):
     """Block-diagonal D ((n, n), n = (max_order+1)²) with L_rotated = D @ L for a rotation R."""
     r = check_rotation(rotation)
     n = num_coefficients(max_order)
-    directions = _spread_directions(4 * n)
+    directions = spread_normals(4 * n)
     before = sh_basis(directions, max_order)
     after = sh_basis(directions @ r.T, max_order)
     d = np.zeros((n, n))
@@ -49,7 +40,7 @@ def sh_rotation_matrix(rotation, max_order=2):
 def rotate_coefficients(coeffs, rotation):
     """Coefficients of the lighting rotated by R: L'(ω) = L(Rᵀ ω). Shape kept."""
     c = np.asarray(coeffs, dtype=np.float64)
-    order = int(round(np.sqrt(c.shape[0]))) - 1
+    order = order_of(c.shape[0])
     return sh_rotation_matrix(rotation, order) @ c
 
 

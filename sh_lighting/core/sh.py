@@ -47,6 +47,22 @@ def order_of(num):
     return order
 
 
+def spread_normals(count):
+    """``count`` near-uniform unit vectors (a Fibonacci lattice in z, golden angle in φ).
+
+    Deterministic: the same ``count`` always gives the same normals. Point k has
+    z = 1 − 2(k + ½)/count, so each covers the same area 4π/count of the sphere. The one
+    lattice of the package: the SH rotation fit, the error estimates and the tests use it.
+    """
+    if int(count) != count or count < 1:
+        raise ValueError(f"count must be a whole number ≥ 1, got {count!r}")
+    k = np.arange(int(count)) + 0.5
+    z = 1.0 - 2.0 * k / count
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * k  # the golden angle, 2π(1 − 1/φ)
+    r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+
+
 def band_of_each_coefficient(max_order):
     """The band l of each of the (max_order + 1)² coefficients, as an int array."""
     return np.repeat(np.arange(max_order + 1), 2 * np.arange(max_order + 1) + 1)

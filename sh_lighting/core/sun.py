@@ -34,20 +34,19 @@ the sunrise map from 2.0 % to 0.35 % of the total power and never makes it worse
 """
 
 from dataclasses import dataclass
-from math import pi, sqrt
+from math import pi
 
 import numpy as np
 
 from .edits import LUMINANCE
 from .equirect import (
+    check_finite_pixels,
     check_pixels,
-    column_centres,
-    row_centres,
     row_edges,
     texel_directions,
     texel_solid_angles,
 )
-from .irradiance import irradiance, reference_irradiance
+from .irradiance import irradiance, reference_irradiance, relative_error, total_power
 from .projection import project_equirect
 
 CONTRAST = 100.0  # peak and region: this many times the background level
@@ -88,16 +87,6 @@ def weighted_median(values, weights):
     return float(values.ravel()[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
 
 
-def _band_directions(height, width, r0, r1):
-    """``texel_directions(height, width)[r0:r1]`` without computing the other rows."""
-    theta = row_centres(height)[r0:r1, None]
-    phi = column_centres(width)[None, :]
-    sin_t = np.sin(theta)
-    return np.stack(
-        np.broadcast_arrays(sin_t * np.cos(phi), sin_t * np.sin(phi), np.cos(theta)), axis=-1
-    )
-
-
 def _dilate(region, touches_top, touches_bottom):
     """8-neighbour dilation on an equirect band of rows, wrapping in longitude and at the poles."""
     out = region.copy()
@@ -136,11 +125,9 @@ def detect_sun(
     ``pixels``: (H, W, 3 or 4) linear radiance, rows top to bottom. Criteria and the meaning of
     each parameter: module docstring.
     """
-    a = check_pixels(pixels)
+    a = check_finite_pixels(check_pixels(pixels))
     height, width, _ = a.shape
     rgb = a[..., :3].astype(np.float64)
-    if not np.isfinite(rgb).all():
-        raise ValueError("pixels contain NaN or Inf: repair the image first")
     lum = rgb @ LUMINANCE
     solid = texel_solid_angles(height, width)
     background = weighted_median(lum, solid[:, None])
@@ -175,7 +162,7 @@ def detect_sun(
     sun_power = float(sun_irradiance @ LUMINANCE)
     if sun_power < min_power_fraction * total:
         return None
-    directions = _band_directions(height, width, r0, r1)[region]
+    directions = texel_directions(height, width, band)[region]
     direction = (excess @ LUMINANCE) @ directions
     direction /= np.linalg.norm(direction)
     if np.arccos(np.clip(directions @ direction, -1.0, 1.0)).max() >= max_radius:
@@ -267,23 +254,18 @@ def sun_split_error(pixels, normals, sun=None, eevee_threshold=EEVEE_SUN_THRESHO
     n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
     reference = reference_irradiance(a, n)
     coeffs = project_equirect(a)
-    power = 2.0 * sqrt(pi) * coeffs[0]  # ∫ L dω = L00 / Y00
-
-    def error(e):
-        relative = np.abs(e - reference) / power
-        return float(relative.mean(axis=0).max()), float(relative.max())
-
-    plain = error(irradiance(coeffs, n))
+    power = total_power(coeffs)
+    plain = relative_error(irradiance(coeffs, n), reference, power)
     if sun is None:
         sun = detect_sun(a, **detect)
     if sun is None:
         split = plain
     else:
         rest = project_equirect(remove_sun(a, sun))
-        split = error(irradiance(rest, n) + sun_irradiance(sun, n))
+        split = relative_error(irradiance(rest, n) + sun_irradiance(sun, n), reference, power)
     eevee_rgb, eevee_dir, eevee_coeffs = eevee_style_split(a, eevee_threshold)
     e = irradiance(eevee_coeffs, n)
     if eevee_dir is not None:
         e = e + np.maximum(n @ eevee_dir, 0.0)[:, None] * eevee_rgb
-    eevee = error(e)
+    eevee = relative_error(e, reference, power)
     return SunSplitErrors(*plain, *split, *eevee, sun)

@@ -30,7 +30,7 @@ from math import pi, sqrt
 
 import numpy as np
 
-from .irradiance import check_coefficients, irradiance
+from .irradiance import check_coefficients, error_over_power, irradiance, total_power
 from .minimum import irradiance_minimum
 from .sh import band_of_each_coefficient
 
@@ -179,10 +179,8 @@ def window_cost(coeffs, window, normals, reference):
     """
     c, _ = check_coefficients(coeffs)
     ref = np.asarray(reference, dtype=np.float64)
-    power = 2.0 * sqrt(pi) * c[0]
-    if np.any(power <= 0.0):
-        raise ValueError("a channel has total power ≤ 0 (L00 ≤ 0): relative errors are undefined")
-    plain = np.abs(irradiance(c, normals) - ref) / power
-    windowed = np.abs(irradiance(apply_window(c, window), normals) - ref) / power
+    power = total_power(c)
+    plain = error_over_power(irradiance(c, normals), ref, power)
+    windowed = error_over_power(irradiance(apply_window(c, window), normals), ref, power)
     return WindowCost(plain.mean(axis=0), plain.max(axis=0), windowed.mean(axis=0),
                       windowed.max(axis=0))

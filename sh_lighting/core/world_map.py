@@ -34,12 +34,13 @@ from math import pi
 import numpy as np
 
 from .equirect import (
+    check_finite_pixels,
     check_pixels,
     column_centres,
-    describe_nonfinite,
     row_centres,
     texel_solid_angles,
 )
+from .irradiance import _check_normals
 from .projection import project_equirect
 from .rotation import euler_xyz_matrix, rotate_coefficients
 
@@ -114,11 +115,8 @@ def equirect_irradiance(pixels, normals):
     or 4) linear radiance, rows top to bottom. Returns (..., 3) float64.
     """
     a = check_pixels(pixels)
-    n = np.asarray(normals, dtype=np.float64)
-    if n.ndim < 1 or n.shape[-1] != 3:
-        raise ValueError(f"normals must have shape (..., 3), got {np.shape(normals)}")
-    if not np.isfinite(a[..., :3]).all():
-        raise ValueError(f"pixels contain {describe_nonfinite(a)[1]}: repair the image first")
+    n = _check_normals(normals)
+    check_finite_pixels(a)
     height, width, _ = a.shape
     flat = n.reshape(-1, 3)
     theta = row_centres(height)
@@ -146,21 +144,6 @@ def equirect_irradiance(pixels, normals):
         lit = st * (x * arc[:, :, 1] + y * arc[:, :, 2]) + z * ct * arc[:, :, 0]
         result += lit.sum(axis=1)
     return result.reshape(n.shape[:-1] + (3,))
-
-
-def spread_normals(count):
-    """``count`` near-uniform unit vectors (a Fibonacci lattice in z, golden angle in φ).
-
-    Deterministic: the same ``count`` always gives the same normals. Point k has
-    z = 1 − 2(k + ½)/count, so each covers the same area 4π/count of the sphere.
-    """
-    if int(count) != count or count < 1:
-        raise ValueError(f"count must be a whole number ≥ 1, got {count!r}")
-    k = np.arange(int(count)) + 0.5
-    z = 1.0 - 2.0 * k / count
-    phi = np.pi * (3.0 - np.sqrt(5.0)) * k  # the golden angle, 2π(1 − 1/φ)
-    r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
 
 
 def sun_light_rotation(direction):

@@ -28,7 +28,7 @@ from sh_lighting.core.preview import basis_sphere_images, irradiance_sphere_imag
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.rotation import euler_xyz_matrix, rotate_coefficients
 from sh_lighting.core.sh import sh_basis
-from sh_lighting.core.world_map import spread_normals
+from sh_lighting.core.sh import spread_normals
 
 pytestmark = pytest.mark.blender
 

@@ -12,21 +12,14 @@ import pytest
 from sh_lighting.core import pruning
 from sh_lighting.core.irradiance import C1, C2, C3, C4, C5, irradiance
 from sh_lighting.core.minimum import irradiance_minimum
+from sh_lighting.core.sh import spread_normals
 
 # A grid of 40,000 normals: the spacing (~0.018 rad) bounds how far below a true maximum of a
 # quadratic of unit-size coefficients the grid's maximum can fall (second order: ~1e-4).
 GRID_SLACK = 2e-4
 
 
-def fibonacci_sphere(count=40_000):
-    i = np.arange(count) + 0.5
-    z = 1.0 - 2.0 * i / count
-    r = np.sqrt(1.0 - z * z)
-    phi = i * math.pi * (3.0 - math.sqrt(5.0))
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
-
-
-NORMALS = fibonacci_sphere()
+NORMALS = spread_normals(40_000)
 
 
 def only(index, rgb=(1.0, 1.0, 1.0)):

@@ -62,3 +62,10 @@ def test_euler_xyz_follows_blender():
 def test_not_a_rotation_is_refused():
     with pytest.raises(ValueError, match="not a rotation"):
         sh_rotation_matrix(np.diag([1.0, 1.0, -1.0]))
+
+
+@pytest.mark.parametrize("rows", [0, 8, 10])
+def test_a_row_count_that_is_no_order_is_refused(rows):
+    """Rows must be (order + 1)²: a clear message, not a failed matrix product."""
+    with pytest.raises(ValueError, match=f"{rows} SH coefficients is not"):
+        rotate_coefficients(np.ones((rows, 3)), np.eye(3))

@@ -8,12 +8,12 @@ from sh_lighting.core.equirect import texel_directions
 from sh_lighting.core.irradiance import irradiance, reference_irradiance
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.rotation import euler_xyz_matrix, rotate_coefficients
+from sh_lighting.core.sh import spread_normals
 from sh_lighting.core.world_map import (
     equirect_irradiance,
     map_coefficients,
     map_irradiance,
     mapping_rotation,
-    spread_normals,
     sun_light_rotation,
     to_world_direction,
 )
