@@ -52,7 +52,6 @@ from .blender import properties as _properties
 from .blender import scene_data as _scene_data
 from .blender import world as _world
 from .blender import world_cache as _world_cache
-from .blender.preferences import ADDON_ID as _ADDON_ID
 from .core.presets import PresetError
 
 WorldError = _world.WorldError
@@ -70,14 +69,6 @@ __all__ = [
 ]
 
 
-def _default_capture_width(scene):
-    settings = getattr(scene, "sh_lighting", None)
-    addon = bpy.context.preferences.addons.get(_ADDON_ID)
-    return _properties.capture_width_for(
-        settings, addon.preferences if addon is not None else None
-    )
-
-
 def compute_from_world(scene, capture_width=None):
     """Project ``scene``'s world onto 9 SH coefficients and store them on the scene.
 
@@ -88,10 +79,7 @@ def compute_from_world(scene, capture_width=None):
     values. Returns the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
     user-facing message, leaving the scene unchanged, when the world cannot be read.
     """
-    if capture_width is None:
-        capture_width = _default_capture_width(scene)
-    coeffs, _info = _world_cache.cached_world_coefficients(scene, capture_width=int(capture_width))
-    return _properties.store_coefficients(scene, coeffs, computed=True)
+    return _world_cache.compute_and_store(scene, capture_width)[0]
 
 
 def get_coefficients(scene):
@@ -118,10 +106,7 @@ def reset(scene):
 
     A LookupError if nothing was computed yet. Returns the restored (9, 3) array.
     """
-    computed = _scene_data.get_computed(scene)
-    if computed is None:
-        raise LookupError("Nothing to reset to: run Compute from World first")
-    return _properties.store_coefficients(scene, computed)
+    return _properties.reset_coefficients(scene)
 
 
 def ensure_node_group(scene):

@@ -21,7 +21,15 @@ import bpy
 import numpy as np
 
 
-def _missing_data_message(image):
+def has_pixel_data(image):
+    """Whether ``image`` has pixels to read (loading them from its file if not done yet)."""
+    # Reading ``size`` makes Blender load the image buffer if it has not done so yet; only then
+    # does ``has_data`` tell whether loading worked.
+    width, height = image.size
+    return image.has_data and width > 0 and height > 0
+
+
+def missing_data_message(image):
     """Why ``image`` has no pixels, and what the user can do about it."""
     name = image.name
     if image.type in {"RENDER_RESULT", "COMPOSITING"}:
@@ -67,11 +75,9 @@ def image_pixels(image):
     Raises ValueError explaining what to do when the image has no pixel data (file missing or
     unreadable, render result, empty image).
     """
-    # Reading ``size`` makes Blender load the image buffer if it has not done so yet; only then
-    # does ``has_data`` tell whether loading worked.
+    if not has_pixel_data(image):
+        raise ValueError(missing_data_message(image))
     width, height = image.size
-    if not image.has_data or width == 0 or height == 0:
-        raise ValueError(_missing_data_message(image))
     channels = image.channels
     flat = np.empty(width * height * channels, dtype=np.float32)
     image.pixels.foreach_get(flat)

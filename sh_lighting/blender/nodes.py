@@ -214,16 +214,20 @@ def _fit(tree):
     )
 
 
-def refit_hint(scene):
+def refit_hint(scene, *, tree=..., info=...):
     """None when the file's SH group suits ``scene``'s current lighting, else a short reason.
 
     Cheap enough for a panel's draw: the current values only (no F-curve sampling), plus a
     comparison of the scene's animation signature with the one the group was fitted to.
+    ``tree`` and ``info``: the group and its ``fit_info`` when the caller has them already
+    (default: ``find_node_group()`` and ``fit_info(tree)``).
     """
-    tree = find_node_group()
+    if tree is ...:
+        tree = find_node_group()
     if tree is None:
         return None
-    info = fit_info(tree)
+    if info is ...:
+        info = fit_info(tree)
     spec = info["spec"] if info is not None else FULL_SPEC
     recorded = info["scenes"].get(scene.name) if info is not None else None
     return fitting.hint(scene, spec.terms, spec.scalar, spec.clamp, recorded)

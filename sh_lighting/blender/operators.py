@@ -12,12 +12,6 @@ import bpy
 
 from . import materials, nodes, properties, scene_data, world_cache
 from .polls import coefficients_poll, scene_poll
-from .preferences import ADDON_ID
-
-
-def _addon_preferences(context):
-    addon = context.preferences.addons.get(ADDON_ID)
-    return addon.preferences if addon is not None else None
 
 
 def objects_for_target(context, target):
@@ -69,26 +63,20 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
         return scene_poll(cls, context)
 
     def execute(self, context):
-        scene = context.scene
-        width = properties.capture_width_for(scene.sh_lighting, _addon_preferences(context))
         start = time.perf_counter()
         try:
-            coeffs, info = world_cache.cached_world_coefficients(scene, capture_width=width)
-            properties.store_coefficients(scene, coeffs, computed=True)
+            _coeffs, info = world_cache.compute_and_store(context.scene)
         except ValueError as error:  # WorldError and invalid coefficients
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         elapsed = time.perf_counter() - start
-        if getattr(info, "cached", False):
+        if info.cached:
             self.report(
                 {"INFO"}, f"SH lighting reused: world '{info.world}' has not changed since it "
                 "was last computed"
             )
             return {"FINISHED"}
-        source = getattr(info, "source", None)
-        origin = {"image": "the world image", "capture": "a capture of the world"}.get(
-            source, "the world"
-        )
+        origin = "the world image" if info.source == "image" else "a capture of the world"
         self.report({"INFO"}, f"SH lighting computed from {origin} in {elapsed:.2f} s")
         return {"FINISHED"}
 
@@ -110,11 +98,9 @@ class SHLIGHT_OT_reset(bpy.types.Operator):
         return True
 
     def execute(self, context):
-        scene = context.scene
         try:
-            computed = scene_data.get_computed(scene)
-            properties.store_coefficients(scene, computed)
-        except (TypeError, ValueError) as error:
+            properties.reset_coefficients(context.scene)
+        except (LookupError, TypeError, ValueError) as error:
             self.report({"ERROR"}, f"Cannot reset: {error}")
             return {"CANCELLED"}
         self.report({"INFO"}, "SH lighting reset to the values computed from the world")

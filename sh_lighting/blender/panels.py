@@ -65,7 +65,7 @@ def draw_node_group(layout, context):
             col.label(text=f"Left-out error ≤ {100.0 * info['bound']:.3g} % of mean irradiance")
         else:
             col.label(text="Left out: nothing (all 9 terms)")
-    hint = nodes.refit_hint(scene)
+    hint = nodes.refit_hint(scene, tree=tree, info=info)
     if hint:
         row = col.row()
         row.alert = True

@@ -6,6 +6,12 @@ import bpy
 ADDON_ID = __package__.rpartition(".")[0]
 
 
+def addon_preferences():
+    """The add-on's preferences, or None when it is not enabled (e.g. registered by tests)."""
+    addon = bpy.context.preferences.addons.get(ADDON_ID)
+    return addon.preferences if addon is not None else None
+
+
 class SHLIGHT_AddonPreferences(bpy.types.AddonPreferences):
     bl_idname = ADDON_ID
 

@@ -97,6 +97,17 @@ def store_coefficients(scene, coeffs, computed=False):
     return c
 
 
+def reset_coefficients(scene):
+    """Store the values last computed from the world as the coefficients again (Reset).
+
+    A LookupError if nothing was computed yet. Returns the restored (9, 3) array.
+    """
+    computed = scene_data.get_computed(scene)
+    if computed is None:
+        raise LookupError("Nothing to reset to: run Compute from World first")
+    return store_coefficients(scene, computed)
+
+
 def row_value(rgb):
     """The row value of an RGB triple: its signed channel mean."""
     return float(np.mean(rgb))

@@ -28,10 +28,10 @@ from dataclasses import dataclass
 from ..core.colour import srgb_to_linear
 from ..core.mirror_ball import project_mirror_ball
 from ..core.projection import project_equirect
-from ..core.rotation import euler_xyz_matrix, rotate_coefficients
+from ..core.world_map import apply_mapping
 from . import compat
 from .capture import CaptureError, capture_world
-from .images import image_pixels
+from .images import has_pixel_data, image_pixels, missing_data_message
 
 PROJECTIONS = ("EQUIRECTANGULAR", "MIRROR_BALL")
 # 8-bit colour spaces whose byte / 255 values are already the linear radiance Cycles renders.
@@ -129,11 +129,6 @@ def _upstream_nodes(output):
     return nodes
 
 
-def _image_has_data(image):
-    width, height = image.size  # reading the size makes Blender load the image
-    return image.has_data and width > 0 and height > 0
-
-
 def _check_images(world, output):
     """WorldError for an image texture without an image, or an image without pixel data."""
     for node in _upstream_nodes(output):
@@ -148,12 +143,9 @@ def _check_images(world, output):
                     "open an HDR image in it (World properties > Surface > Color), or remove it"
                 )
             continue  # an Image Texture without an image renders black, like Cycles shows
-        if image.source in ("FILE", "SEQUENCE", "MOVIE") and not _image_has_data(image):
-            path = image.filepath or "(no file path)"
+        if image.source in ("FILE", "SEQUENCE", "MOVIE") and not has_pixel_data(image):
             raise WorldError(
-                f"image '{image.name}' of the {kind} '{node.name}' in world '{world.name}' has "
-                f"no pixel data: its file {path} is missing or unreadable; fix the path "
-                "(Image Editor > Image > Replace) or pack the image into the .blend file"
+                f"world '{world.name}', {kind} '{node.name}': {missing_data_message(image)}"
             )
 
 
@@ -273,22 +265,16 @@ def _linear_pixels(image, pixels):
 
 
 def _project_image(plan, world):
-    try:
-        pixels = image_pixels(plan.image)
-    except ValueError as error:
-        raise WorldError(f"world '{world.name}': {error}") from None
+    # ``_check_images`` has made sure a file image has pixels; a generated one always has.
+    pixels = image_pixels(plan.image)
     linear = _linear_pixels(plan.image, pixels)
     project = project_equirect if plan.projection == "EQUIRECTANGULAR" else project_mirror_ball
     try:
         coeffs = project(linear)
     except ValueError as error:
         raise WorldError(f"image '{plan.image.name}' of world '{world.name}': {error}") from None
-    coeffs *= plan.strength
-    if plan.rotation is not None:
-        # The Mapping node turns the lookup direction by R: the lighting is the image turned
-        # by R⁻¹ = Rᵀ.
-        coeffs = rotate_coefficients(coeffs, euler_xyz_matrix(plan.rotation).T)
-    return coeffs
+    # The Mapping node turns the lookup direction by R: the lighting is the image turned by Rᵀ.
+    return apply_mapping(coeffs, plan.strength, plan.rotation)
 
 
 def world_coefficients(scene, capture_width=256):

@@ -31,7 +31,7 @@ from dataclasses import replace
 import bpy
 import numpy as np
 
-from . import compat, world
+from . import compat, preferences, properties, world
 
 CACHE_SIZE = 16
 _CACHE = {}
@@ -56,18 +56,37 @@ def cached_world_coefficients(scene, capture_width=256):
         return world.world_coefficients(scene, capture_width=capture_width)
     key = world_id.as_pointer()
     entry = _CACHE.get(key)
-    if entry is not None and entry[0] == world_signature(scene, capture_width):
-        info = entry[2]
-        if isinstance(info, world.WorldInfo):
-            info = replace(info, cached=True, elapsed=time.perf_counter() - start)
+    images = []
+    signature = world_signature(scene, capture_width, images)
+    if entry is not None and entry[0] == signature:
+        info = replace(entry[2], cached=True, elapsed=time.perf_counter() - start)
         return entry[1].copy(), info
+    loaded = [image.has_data for image in images]
     coeffs, info = world.world_coefficients(scene, capture_width=capture_width)
+    if [image.has_data for image in images] != loaded:
+        # Computing loaded an image: sign again, as the next look-up will see it.
+        signature = world_signature(scene, capture_width)
     _CACHE.pop(key, None)
     while len(_CACHE) >= CACHE_SIZE:
         _CACHE.pop(next(iter(_CACHE)))
-    # Taken after the computation: the images are loaded now, as they will be next time.
-    _CACHE[key] = (world_signature(scene, capture_width), np.array(coeffs, copy=True), info)
+    _CACHE[key] = (signature, np.array(coeffs, copy=True), info)
     return coeffs, info
+
+
+def compute_and_store(scene, capture_width=None):
+    """Compute from World: ``cached_world_coefficients`` stored on ``scene`` as its
+    coefficients and its Reset values.
+
+    ``capture_width`` None: the scene's override, else the add-on preferences', else 256.
+    Returns the stored (9, 3) float64 copy and the ``WorldInfo``; a ValueError (``WorldError``
+    or invalid coefficients) leaves the scene unchanged.
+    """
+    if capture_width is None:
+        capture_width = properties.capture_width_for(
+            getattr(scene, "sh_lighting", None), preferences.addon_preferences()
+        )
+    coeffs, info = cached_world_coefficients(scene, capture_width=int(capture_width))
+    return properties.store_coefficients(scene, coeffs, computed=True), info
 
 
 def clear_cache():
@@ -92,8 +111,11 @@ def unregister_cache():
     clear_cache()
 
 
-def world_signature(scene, capture_width):
-    """A digest of everything ``world_coefficients(scene, capture_width)`` depends on."""
+def world_signature(scene, capture_width, images=None):
+    """A digest of everything ``world_coefficients(scene, capture_width)`` depends on.
+
+    The images it covers are appended to the list ``images`` when one is given.
+    """
     world_id = scene.world
     parts = [int(capture_width), world_id.name_full, compat.uses_nodes(world_id)]
     animated = world_id.animation_data is not None
@@ -101,11 +123,11 @@ def world_signature(scene, capture_width):
     if tree is None:
         parts.append(tuple(world_id.color))
     else:
-        images = []
-        parts.append(_tree_signature(tree, set(), images))
+        found = [] if images is None else images
+        parts.append(_tree_signature(tree, set(), found))
         animated = animated or _tree_animated(tree, set())
-        parts.extend(_image_signature(image) for image in images)
-        animated = animated or any(i.source in ("SEQUENCE", "MOVIE") for i in images)
+        parts.extend(_image_signature(image) for image in found)
+        animated = animated or any(i.source in ("SEQUENCE", "MOVIE") for i in found)
     if animated:
         parts.append(("frame", scene.frame_current, scene.frame_subframe))
     return hashlib.blake2b(repr(parts).encode(), digest_size=20).hexdigest()

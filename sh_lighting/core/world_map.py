@@ -72,7 +72,16 @@ def map_coefficients(pixels, strength=1.0, euler=None, max_order=2):
     s · (the image's L_lm rotated by Rᵀ): what ``sh_lighting.blender.world`` computes for
     such a world, for any pixels (e.g. a map with its sun taken out).
     """
-    coeffs = project_equirect(pixels, max_order=max_order) * float(strength)
+    return apply_mapping(project_equirect(pixels, max_order=max_order), strength, euler)
+
+
+def apply_mapping(coeffs, strength=1.0, euler=None):
+    """L_lm of the world showing an image whose own L_lm are ``coeffs``, at ``strength``
+    through ``euler``: s · (``coeffs`` rotated by Rᵀ), a new float64 array.
+
+    The step after the projection, whatever the image's layout (equirect or mirror ball).
+    """
+    coeffs = np.asarray(coeffs, dtype=np.float64) * float(strength)
     if euler is None:
         return coeffs
     return rotate_coefficients(coeffs, mapping_rotation(euler))

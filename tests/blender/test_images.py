@@ -1,11 +1,13 @@
 """sh_lighting.blender.images: Blender images -> (H, W, 4) float32 arrays, rows top to bottom."""
 
+import os
 import struct
 import zlib
 
 import bpy
 import numpy as np
 import pytest
+from blender_files import write_exr
 
 from sh_lighting.blender.images import image_pixels, load_image_pixels
 
@@ -25,20 +27,6 @@ def known_rgba():
     pixels[..., 3] = 1.0
     pixels[0, 0, 3] = 0.5
     return pixels
-
-
-def write_exr(path, pixels):
-    """Save top-to-bottom ``pixels`` as a 32-bit float RGBA OpenEXR with Blender."""
-    height, width = pixels.shape[:2]
-    image = bpy.data.images.new("known", width, height, float_buffer=True, alpha=True)
-    image.pixels.foreach_set(pixels[::-1].ravel())  # Blender wants the bottom row first
-    settings = bpy.context.scene.render.image_settings
-    settings.file_format = "OPEN_EXR"
-    settings.color_mode = "RGBA"
-    settings.color_depth = "32"
-    image.save_render(str(path), scene=bpy.context.scene)
-    bpy.data.images.remove(image)
-    return path
 
 
 def png_bytes(rgb_rows):
@@ -76,7 +64,7 @@ def test_exr_round_trip_top_to_bottom(tmp_path):
 
 def test_image_pixels_of_datablock_is_flipped_view(tmp_path):
     expected = known_rgba()
-    image = bpy.data.images.load(str(write_exr(tmp_path / "known.exr", expected)))
+    image = bpy.data.images.load(write_exr(tmp_path / "known.exr", expected))
 
     pixels = image_pixels(image)
 
@@ -141,8 +129,8 @@ def test_unreadable_file_raises_value_error_and_leaves_nothing(tmp_path):
 
 def test_datablock_whose_file_vanished(tmp_path):
     path = write_exr(tmp_path / "gone.exr", known_rgba())
-    image = bpy.data.images.load(str(path))
-    path.unlink()  # removed before Blender read the pixels (images load lazily)
+    image = bpy.data.images.load(path)
+    os.remove(path)  # removed before Blender read the pixels (images load lazily)
     with pytest.raises(ValueError) as info:
         image_pixels(image)
     message = str(info.value)

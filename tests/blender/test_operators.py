@@ -97,7 +97,9 @@ def test_capture_width_comes_from_the_scene_override(addon, monkeypatch):
 
     def fake_world_coefficients(scene, capture_width=256):
         widths.append(capture_width)
-        return KNOWN, None
+        return KNOWN, world.WorldInfo(
+            source="capture", world="fake", elapsed=0.0, capture_width=capture_width
+        )
 
     monkeypatch.setattr(world, "world_coefficients", fake_world_coefficients)
     scene = bpy.context.scene
@@ -176,7 +178,7 @@ def scene_state(scene):
         (no_world, "has no world"),
         (world_without_nodes, "has no World Output node"),
         (environment_without_image, "has no image"),
-        (missing_image_file, "is missing or unreadable"),
+        (missing_image_file, "gone.exr' does not exist"),
         (disconnected_output, "is not connected"),
     ],
     ids=lambda v: getattr(v, "__name__", ""),

@@ -5,7 +5,7 @@
 import bpy
 import pytest
 
-from sh_lighting.blender import operators, panels, properties, scene_data
+from sh_lighting.blender import nodes, operators, panels, properties, scene_data
 from sh_lighting.core.sh import COEFFICIENT_NAMES
 
 CYCLES = 20
@@ -136,6 +136,23 @@ def test_panels_draw_resolvable_properties_and_operators(addon):
             assert 0 <= kwargs["index"] < len(value)
     rgb = [(path, kwargs["index"]) for _, data, path, kwargs in props if "index" in kwargs]
     assert rgb[6:9] == [('["sh_L10"]', 0), ('["sh_L10"]', 1), ('["sh_L10"]', 2)]
+
+
+def test_node_group_panel_shows_the_refit_hint(addon):
+    scene = bpy.context.scene
+    calls = []
+    panels.draw_node_group(RecordingLayout(calls), bpy.context)
+    assert any("none yet" in c[1] for c in calls if c[0] == "label")
+    properties.store_coefficients(scene, [[1.0, 1.0, 1.0]] + [[0.0, 0.0, 0.0]] * 8)
+    nodes.ensure_node_group(scene)
+    scene["sh_L11"] = [0.2, 0.2, 0.2]  # a raw edit needing a term the group left out
+    hint = nodes.refit_hint(scene)
+    assert hint and "L11" in hint
+    calls.clear()
+    panels.draw_node_group(RecordingLayout(calls), bpy.context)
+    labels = [c[1] for c in calls if c[0] == "label"]
+    assert labels[0].startswith("Node group: ") and hint in labels
+    assert ("operator", "shlight.refit", {"icon": "FILE_REFRESH"}) in calls
 
 
 def test_panels_live_in_world_properties_and_sidebar(addon):

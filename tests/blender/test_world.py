@@ -443,7 +443,9 @@ def test_sky_texture_is_lit_from_above_and_converges():
     assert np.isfinite(fine).all() and (fine[0] > 0).all()
     assert (fine[2] > 0.1 * fine[0]).all()  # L10: more light from above than from below
     assert rel_err(coarse, fine) < 0.04
-    assert abs(fine[0, 0] / 42.59 - 1.0) < 0.02
+    # The reference was rendered with 5.0 (here +0.11 %); 4.2's sky gives 1.9 % less light.
+    tolerance = 0.005 if bpy.app.version >= (5, 0, 0) else 0.025
+    assert abs(fine[0, 0] / 42.59 - 1.0) < tolerance
 
     sky.sun_disc = False
     coarse, _ = world_coefficients(bpy.context.scene, capture_width=64)
@@ -535,7 +537,7 @@ def break_world(case, tmp_path):
         texture.image = image
         world.node_tree.links.new(texture.outputs["Color"],
                                   world.node_tree.nodes["Background"].inputs["Color"])
-        return "missing or unreadable"
+        return "does not exist"
     raise AssertionError(case)
 
 
