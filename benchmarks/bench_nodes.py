@@ -14,13 +14,11 @@ sphere and compared:
   each fresh material gets a code of its own: j = 1, 2, 3 extra Vector Math nodes after the
   group (the same for the full and the fitted group); the median of the three. A layout is
   measured once, where it first appears (later rows show "="). With software OpenGL (llvmpipe)
-  one group's compile is below the noise of a render (~0.3 s): a 400-node material measured
-  ~4 s of compile here, a 50-node one none; and "first − second render" is no better, the
-  second render of a material being ~0.45 s slower than the first. (A material holding 4 or 8
-  copies of the group did not finish compiling within 10 minutes under llvmpipe, so the
-  compile cannot be amplified that way.)
+  one group's compile can be below the noise of a render, and "first − second render" does
+  not isolate it either; a material holding several copies of the group, to amplify the
+  compile, can take too long to compile under llvmpipe.
 
-Takes about 3 minutes; run it on a quiet machine.
+Takes minutes; run it on a quiet machine.
 """
 
 import statistics

@@ -187,19 +187,23 @@ LABELS = {"HANNING": "Hanning", "LANCZOS": "Lanczos", "MINIMAL": "Minimal"}
 class WindowResult:
     """What ``apply_window`` did.
 
-    kind, window (3,) w_0..w_2, coefficients (9, 3) stored, minimum (3,) exact min of the new
-    E(n) per channel. costs: {kind: ``core.windowing.WindowCost``} of every window (the one
-    applied and the others, for comparison, at the same width) against the world image's
-    brute-force irradiance, as fractions of its total light; empty, with ``note`` saying why,
-    when the coefficients are not those of an equirect world image.
+    kind, window (3,) w_0..w_2, coefficients (9, 3) stored. costs: {kind:
+    ``core.windowing.WindowCost``} of every window (the one applied and the others, for
+    comparison, at the same width) against the world image's brute-force irradiance, as
+    fractions of its total light; empty, with ``note`` saying why, when the coefficients are
+    not those of an equirect world image. ``minimum``: computed only when read.
     """
 
     kind: str
     window: np.ndarray
     coefficients: np.ndarray
-    minimum: np.ndarray
     costs: dict
     note: str
+
+    @property
+    def minimum(self):
+        """(3,) exact min of the new E(n) per channel, computed when asked for."""
+        return irradiance_minimum(self.coefficients).value
 
     @property
     def cost(self):
@@ -274,7 +278,7 @@ def apply_window(scene, kind, width=DEFAULT_WIDTH):
     window = window_for(kind, coeffs, width)
     costs, note = _world_costs(scene, coeffs, kind, window, width)
     stored = properties.store_coefficients(scene, windowing.apply_window(coeffs, window))
-    return WindowResult(kind, window, stored, irradiance_minimum(stored).value, costs, note)
+    return WindowResult(kind, window, stored, costs, note)
 
 
 # -- the sun -----------------------------------------------------------------------------------

@@ -7,10 +7,13 @@ and the irradiance sphere of the current coefficients (``previews``), the negati
 warning, what each coefficient does, and the buttons.
 """
 
+import math
 import textwrap
 
 import bpy
 
+from ..core.edits import describe_coefficients
+from ..core.minimum import negative_light_warning
 from . import design, panels, previews, scene_data
 from .polls import NO_COEFFICIENTS, coefficients_poll, scene_poll
 
@@ -71,15 +74,15 @@ class SHLIGHT_OT_rotate(_Dialog, _Edit, bpy.types.Operator):
     )
     yaw: bpy.props.FloatProperty(
         name="Yaw", description="Turn about the vertical +Z axis (+90° takes +X to +Y)",
-        subtype="ANGLE", soft_min=-6.283185307179586, soft_max=6.283185307179586,
+        subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau,
     )
     pitch: bpy.props.FloatProperty(
         name="Pitch", description="Turn about +X (+90° takes +Y to +Z), before the yaw",
-        subtype="ANGLE", soft_min=-6.283185307179586, soft_max=6.283185307179586,
+        subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau,
     )
     roll: bpy.props.FloatProperty(
         name="Roll", description="Turn about +Y (+90° takes +Z to +X), before the pitch",
-        subtype="ANGLE", soft_min=-6.283185307179586, soft_max=6.283185307179586,
+        subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau,
     )
 
     def invoke(self, context, event):
@@ -217,13 +220,12 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
         return design.apply_window(scene, self.kind, self.width).report()
 
 
-class SHLIGHT_OT_split_sun(bpy.types.Operator):
+class SHLIGHT_OT_split_sun(_Edit, bpy.types.Operator):
     """Take the sun out of the world image as a Sun light (direction, size, colour, strength)
     and keep the rest of the world as SH lighting"""
 
     bl_idname = "shlight.split_sun"
     bl_label = "Split Sun"
-    bl_options = {"REGISTER", "UNDO"}
 
     @classmethod
     def poll(cls, context):
@@ -234,23 +236,16 @@ class SHLIGHT_OT_split_sun(bpy.types.Operator):
             return False
         return True
 
-    def execute(self, context):
-        try:
-            info = design.split_sun(context.scene)
-        except (LookupError, ValueError) as error:  # WorldError, DesignError
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
+    def apply(self, scene):  # WorldError and DesignError are ValueErrors: _Edit reports them
+        info = design.split_sun(scene)
         if info is None:
-            self.report({"INFO"}, "No sun found in the world image: nothing changed")
-            return {"FINISHED"}
+            return "No sun found in the world image: nothing changed"
         d = ", ".join(f"{v:+.3f}" for v in info.direction)
         verb = "created" if info.created else "updated"
-        self.report(
-            {"INFO"},
+        return (
             f"Sun light '{info.light}' {verb}: toward ({d}), {info.strength:.4g} W/m², "
-            f"{info.power_fraction:.0%} of the world's light; the coefficients hold the rest",
+            f"{info.power_fraction:.0%} of the world's light; the coefficients hold the rest"
         )
-        return {"FINISHED"}
 
 
 # -- the Design sub-panel ----------------------------------------------------------------------
@@ -276,13 +271,13 @@ def draw_lighting(layout, scene):
     col.label(text="White sphere, front view, Film exposure")
     preview = previews.irradiance(coeffs, scene.view_settings.exposure)
     col.template_icon(icon_value=preview.icon_id, scale=IRRADIANCE_SCALE)
-    warning = design.negative_warning(scene)
+    warning = negative_light_warning(coeffs)  # design.negative_warning, without a 2nd read
     if warning:
         box = layout.box().column(align=True)
         for i, line in enumerate(textwrap.wrap(warning, WARNING_WIDTH)):
             box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
     col = layout.column(align=True)
-    for line in design.describe(scene):
+    for line in describe_coefficients(coeffs):  # design.describe
         col.label(text=line)
 
 
@@ -304,8 +299,8 @@ def draw_buttons(layout):
     col = layout.column(align=True)
     col.label(text="Tame ringing")
     row = col.row(align=True)
-    for kind, text in (("HANNING", "Hanning"), ("LANCZOS", "Lanczos"), ("MINIMAL", "Minimal")):
-        row.operator("shlight.window", text=text).kind = kind
+    for kind in design.WINDOWS:
+        row.operator("shlight.window", text=design.LABELS[kind]).kind = kind
     layout.operator("shlight.split_sun", icon="LIGHT_SUN")
 
 

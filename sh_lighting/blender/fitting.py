@@ -16,6 +16,7 @@ it (Always) or needs it (Auto and E < 0 somewhere); a scene set to Never cannot 
 """
 
 import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,6 +31,12 @@ _PATHS = {}
 for _index, _name in enumerate(scene_data.PROPERTY_NAMES):
     _PATHS[f'["{_name}"]'] = _index
     _PATHS[f"['{_name}']"] = _index
+
+# Samples known to give E >= 0 everywhere: (kept terms, float64 bytes of one (9, 3) sample),
+# least recently used first. Each costs an exact minimum (ms) to decide, and refits repeat
+# them: the keyed frames do not change when a slider stores new current values.
+NON_NEGATIVE_CACHE_SIZE = 4096
+_non_negative = OrderedDict()
 
 
 @dataclass(frozen=True)
@@ -70,7 +77,9 @@ def _coefficient_curves(scene):
     return found
 
 
-def _is_unknown(scene):
+def _is_unknown(scene, curves=None):
+    """True when the coefficients' values are not those of the active action's F-curves alone
+    (``curves``: ``_coefficient_curves(scene)`` if the caller has them)."""
     animation = scene.animation_data
     if animation is None:
         return False
@@ -79,7 +88,9 @@ def _is_unknown(scene):
     if any(_PATHS.get(c.data_path) is not None for c in compat.nla_fcurves(scene)):
         return True
     blended = animation.action_blend_type != "REPLACE" or animation.action_influence != 1.0
-    return blended and bool(_coefficient_curves(scene))
+    if not blended:
+        return False
+    return bool(_coefficient_curves(scene) if curves is None else curves)
 
 
 def _frames(scene, curves):
@@ -104,8 +115,16 @@ def _frames(scene, curves):
     return sorted(frames)
 
 
-def animation_signature(scene):
-    """A digest of everything the sampled values depend on besides the current values."""
+def animation_signature(scene, curves=None, unknown=None):
+    """A digest of everything the sampled values depend on besides the current values.
+
+    ``curves``, ``unknown``: ``_coefficient_curves(scene)`` and ``_is_unknown(scene)`` when the
+    caller has them already (else found here).
+    """
+    if curves is None:
+        curves = _coefficient_curves(scene)
+    if unknown is None:
+        unknown = _is_unknown(scene, curves)
     h = hashlib.blake2b(digest_size=16)
     r = scene.render
     h.update(
@@ -118,11 +137,11 @@ def animation_signature(scene):
                 scene.frame_preview_end,
                 r.frame_map_old,
                 r.frame_map_new,
-                _is_unknown(scene),
+                unknown,
             )
         ).encode()
     )
-    for index, channel, curve in _coefficient_curves(scene):
+    for index, channel, curve in curves:
         points = curve.keyframe_points
         h.update(repr((index, channel, curve.extrapolation, len(curve.modifiers))).encode())
         for key in ("co", "handle_left", "handle_right"):
@@ -151,7 +170,37 @@ def scene_samples(scene):
         for index, channel, curve in curves:
             block[:, index, channel] = [curve.evaluate(f) for f in frames]
         samples.extend(block)
-    return SceneSamples(np.array(samples), _is_unknown(scene), animation_signature(scene))
+    unknown = _is_unknown(scene, curves)
+    signature = animation_signature(scene, curves, unknown)
+    return SceneSamples(np.array(samples), unknown, signature)
+
+
+def can_be_negative(samples, kept):
+    """``pruning.can_be_negative(samples, kept)``, remembering the samples found non-negative.
+
+    The same answer: E < 0 for some sample iff for some distinct sample not known to be
+    non-negative. Only those are tested, in one call; when it says False they are all
+    remembered (bounded LRU). A True answer is not attributed to a sample (finding which one
+    could cost an exact minimum per sample), so it is recomputed the next time.
+    """
+    s = pruning.as_samples(samples)  # its errors, before anything is remembered
+    kept = tuple(int(i) for i in kept)
+    untested = {}
+    for sample in s:
+        key = (kept, sample.tobytes())
+        if key in _non_negative:
+            _non_negative.move_to_end(key)
+        else:
+            untested.setdefault(key, sample)
+    if not untested:
+        return False
+    if pruning.can_be_negative(np.array(list(untested.values())), kept):
+        return True
+    for key in untested:
+        _non_negative[key] = True
+        if len(_non_negative) > NON_NEGATIVE_CACHE_SIZE:
+            _non_negative.popitem(last=False)
+    return False
 
 
 def fitted_spec(scenes):
@@ -172,7 +221,7 @@ def fitted_spec(scenes):
     fit = pruning.fit_terms(samples, relative)
     auto = [s.samples for _scene, s, _r, mode in parts if mode == "AUTO"]
     clamp = any(mode == "ALWAYS" for *_rest, mode in parts) or (
-        bool(auto) and pruning.can_be_negative(np.concatenate(auto), fit.kept)
+        bool(auto) and can_be_negative(np.concatenate(auto), fit.kept)
     )
     scalar = pruning.is_grey(samples, fit.kept)
     return Fit(fit.kept, scalar, clamp, fit.bound, fit.bound_absolute, names)
@@ -198,7 +247,7 @@ def hint(scene, terms, scalar, clamp, recorded):
     if scalar and not pruning.is_grey(current, terms):
         return "Refit needed: the lighting is no longer grey"
     if not clamp and (
-        mode == "ALWAYS" or (mode == "AUTO" and pruning.can_be_negative(current, terms))
+        mode == "ALWAYS" or (mode == "AUTO" and can_be_negative(current, terms))
     ):
         return "Refit needed: the irradiance can go negative and the group has no clamp"
     if recorded is None:

@@ -21,6 +21,7 @@ is rebuilt only when the lighting needs another layout (``nodes.ensure_node_grou
 Every material is checked before it is changed; an error while changing it is rolled back.
 """
 
+import functools
 import json
 from typing import NamedTuple
 
@@ -72,37 +73,43 @@ def is_applied(material):
 def apply_to_materials(materials, scene):
     """Drive each material's surface by the SH group; returns ``Result(changed, skipped)``."""
     changed, skipped = [], []
-    group = None
+    # The group, fitted once, when the first material gets it (an error: again next time).
+    group = functools.cache(lambda: ensure_node_group(scene))
     for material in _unique(materials):
         name = _name(material)
         try:
-            _check_editable(material)
-            if is_applied(material):
-                try:
-                    _remove(material)
-                except SkipMaterial as error:
-                    raise SkipMaterial(f"SH lighting is already applied and {error}") from None
-                refreshed = True
-            else:
-                refreshed = False
-            try:
-                plan = _plan(material)
-            except SkipMaterial as error:
-                if refreshed:
-                    raise SkipMaterial(f"SH lighting removed, not re-applied: {error}") from None
-                raise
-            if group is None:
-                group = ensure_node_group(scene)
-            try:
-                _apply(material, plan, group)
-            except Exception as error:  # rolled back by _apply: report, go on with the rest
-                state = "without SH lighting" if refreshed else "unchanged"
-                raise SkipMaterial(f"failed and was left {state}: {error}") from error
+            _apply_one(material, group)
         except SkipMaterial as error:
             skipped.append((name, str(error)))
             continue
         changed.append(name)
     return Result(changed, skipped)
+
+
+def _apply_one(material, group):
+    """Apply to one material (refreshing it if applied); SkipMaterial when left alone.
+
+    ``group``: returns the SH group, called only once the material is known to take it.
+    """
+    _check_editable(material)
+    refreshed = is_applied(material)
+    if refreshed:
+        try:
+            _remove(material)
+        except SkipMaterial as error:
+            raise SkipMaterial(f"SH lighting is already applied and {error}") from None
+    try:
+        plan = _plan(material)
+    except SkipMaterial as error:
+        if refreshed:
+            raise SkipMaterial(f"SH lighting removed, not re-applied: {error}") from None
+        raise
+    tree = group()
+    try:
+        _apply(material, plan, tree)
+    except Exception as error:  # rolled back by _apply: report, go on with the rest
+        state = "without SH lighting" if refreshed else "unchanged"
+        raise SkipMaterial(f"failed and was left {state}: {error}") from error
 
 
 def remove_from_materials(materials):

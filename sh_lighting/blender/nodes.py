@@ -185,10 +185,13 @@ def _fit(tree):
     spec = GroupSpec(fit.terms, fit.scalar, fit.clamp)
     _ensure_interface(tree)
     info = fit_info(tree)
-    rebuilt = info is None or info["spec"] != spec or info.get("fingerprint") != _fingerprint(tree)
+    # The nodes are compared only when the recorded spec is the wanted one.
+    fingerprint = _fingerprint(tree) if info is not None and info["spec"] == spec else None
+    rebuilt = fingerprint is None or info.get("fingerprint") != fingerprint
     if rebuilt:
         _build_nodes(tree, spec)
         tree[GROUP_MARKER] = GROUP_VERSION
+        fingerprint = _fingerprint(tree)
     if hasattr(tree, "description"):  # NodeTree.description is not in every 4.x
         description = (
             "Diffuse lighting from 9 spherical-harmonic coefficients (scene custom properties "
@@ -202,7 +205,7 @@ def _fit(tree):
         "bound": fit.bound,
         "bound_absolute": fit.bound_absolute,
         "nodes": len(tree.nodes),
-        "fingerprint": _fingerprint(tree),
+        "fingerprint": fingerprint,
         "scenes": fit.scenes,
     }
     text = json.dumps(record, sort_keys=True)

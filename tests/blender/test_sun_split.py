@@ -13,13 +13,21 @@ matter (the brightest region holds 0.4 %); studio: its brightest source is a sof
 
 The split always lowers the worst-case error (the ringing of the strong source is gone). The
 mean error can rise a little when the sun holds a modest share of the light, because the SH
-errors of the sun and of the rest partly cancel in the plain fit: measured on Blender 4.2's
-interior.exr (sun 12.5 % of the power), mean 0.70 % → 0.80 %, max 2.54 % → 2.05 %. Where the sun
-carries a fifth of the light or more, the mean drops too.
+errors of the sun and of the rest partly cancel in the plain fit. The maps differ between
+Blender versions (printed by this test with -s, mean/max % of power, plain SH9 → sun+SH9):
+
+* Blender 4.2.23: interior's sun holds 12.5 % of the power, mean 0.70 → 0.80, max 2.54 → 2.05
+  (the only map whose mean rises; forest 6.4 %: mean 0.81 → 0.60; sunset 2.3 %: 0.52 → 0.35).
+* Blender 5.0.1: interior's sun holds 21.5 %, mean 0.69 → 0.47, max 2.20 → 1.58; the mean
+  drops on every map with a sun (forest 6.4 %: 0.81 → 0.60; sunset 2.3 %: 0.51 → 0.35).
+
+So the mean is asserted to drop where the sun carries a fifth of the light or more, and on
+every map with a sun from Blender 5.0 on.
 """
 
 from math import pi
 
+import bpy
 import numpy as np
 import pytest
 from conftest import HDRI_NAMES
@@ -61,7 +69,7 @@ def test_sun_split_on_bundled_hdri(name, hdri_dir, capsys):
         assert (errors.sun_mean, errors.sun_max) == (errors.plain_mean, errors.plain_max)
         return
     assert errors.sun_max < errors.plain_max
-    if sun.power_fraction >= DOMINANT:
+    if sun.power_fraction >= DOMINANT or bpy.app.version >= (5, 0, 0):
         assert errors.sun_mean < errors.plain_mean
     assert np.degrees(sun.angular_diameter) < 10.0
     # sun + rest = the map's power, channel by channel: ΔL00 / Y00 = the sun's irradiance
