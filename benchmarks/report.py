@@ -216,20 +216,18 @@ def section_mips(cfg, hdris, normals):
         pixels.sum, lambda: project_equirect(pixels), cfg["mip_pairs"]
     )
     timed = [{"width": width, "height": width // 2, "project_s": full_s, "ratio": full_ratio,
-              "downsample_s": 0.0, "cumulative_downsample_s": 0.0, "coeff_rel": 0.0,
+              "cumulative_downsample_s": 0.0, "coeff_rel": 0.0,
               "l00_rel": 0.0, "e_max": 0.0}]
     level, cumulative = pixels, 0.0
     while level.shape[1] > cfg["mip_hdri_min_width"]:
         start = time.perf_counter()
         level = downsample2(level, "texel")
-        down_s = time.perf_counter() - start
-        cumulative += down_s
+        cumulative += time.perf_counter() - start
         _, proj_s, ratio = paired_times(
             pixels.sum, lambda: project_equirect(level), cfg["mip_pairs"]
         )
         timed.append({"width": level.shape[1], "height": level.shape[0], "project_s": proj_s,
-                      "ratio": ratio, "downsample_s": down_s,
-                      "cumulative_downsample_s": cumulative,
+                      "ratio": ratio, "cumulative_downsample_s": cumulative,
                       **level_errors(full, project_equirect(level), normals)})
     log(f"mip levels of the synthetic {width}x{width // 2} sun map done "
         f"(full-resolution projection {1e3 * full_s:.0f} ms, sum {1e3 * sum_s:.0f} ms)")
@@ -245,19 +243,20 @@ SH_METHODS = ("SH order 1", "SH order 2", "SH 2, Hanning", "SH 2, min. non-neg."
 
 
 def sh_variants(pixels, repeats):
-    """{method: (prefilter seconds, coefficients, note)} of the SH approximations."""
+    """({method: (prefilter seconds, coefficients)} of the SH approximations, a note of the
+    minimal non-negative window chosen)."""
     out = {}
     for order in (1, 2, 3, 4):
         seconds, coeffs = median_time(lambda: project_equirect(pixels, order), repeats)
-        out[f"SH order {order}"] = (seconds, coeffs, "")
-    base_s, coeffs = out["SH order 2"][0], out["SH order 2"][1]
+        out[f"SH order {order}"] = (seconds, coeffs)
+    base_s, coeffs = out["SH order 2"]
     window = hanning_window(3)
     seconds, windowed = median_time(lambda: apply_window(coeffs, window), repeats)
-    out["SH 2, Hanning"] = (base_s + seconds, windowed, "w = (1, 3/4, 1/4)")
+    out["SH 2, Hanning"] = (base_s + seconds, windowed)
     seconds, minimal = median_time(lambda: minimal_nonnegative_window(coeffs), repeats)
     note = "t = {:.3f}, w = ({:.3f}, {:.3f}, {:.3f})".format(minimal.parameter, *minimal.window)
-    out["SH 2, min. non-neg."] = (base_s + seconds, minimal.coefficients, note)
-    return out
+    out["SH 2, min. non-neg."] = (base_s + seconds, minimal.coefficients)
+    return out, note
 
 
 def evaluate_map(name, pixels, normals, cfg):
@@ -266,13 +265,14 @@ def evaluate_map(name, pixels, normals, cfg):
     reference = reference_irradiance(pixels, normals)
     direct_s = time.perf_counter() - start
     results = {}
-    variants = sh_variants(pixels, cfg["repeats"])
+    variants, window_note = sh_variants(pixels, cfg["repeats"])
     power = power_of(variants["SH order 2"][1])
     for method in SH_METHODS:
-        pre_s, coeffs, note = variants[method]
+        pre_s, coeffs = variants[method]
         eval_s, estimate = median_time(lambda: irradiance(coeffs, normals), cfg["repeats"])
-        results[method] = {"build_s": pre_s, "eval_s": eval_s, "note": note,
+        results[method] = {"build_s": pre_s, "eval_s": eval_s,
                            **error_stats(estimate, reference, power)}
+    results["SH 2, min. non-neg."]["note"] = window_note
     for size in cfg["map_sizes"]:
         h, w = irradiance_map_shape(size * size)
         start = time.perf_counter()
@@ -280,7 +280,6 @@ def evaluate_map(name, pixels, normals, cfg):
         build_s = time.perf_counter() - start
         eval_s, estimate = median_time(lambda: lookup_bilinear(emap, normals), cfg["repeats"])
         results[f"map {w}×{h}"] = {"build_s": build_s, "eval_s": eval_s, "texels": h * w,
-                                   "note": f"{h * w} texels",
                                    **error_stats(estimate, reference, power)}
     sh2, big = results["SH order 2"], results[f"map {w}×{h}"]
     log(f"approx {name}: direct brute force {direct_s:.2f} s; SH2 mean {100 * sh2['mean']:.2f} %"
@@ -390,9 +389,9 @@ def plot_approx(approx, path):
     markers = "os^vDPXp*h"
     for i, m in enumerate(names):
         per = [r["methods"][m] for r in approx["hdri"].values()]
-        t = np.median([p["build_s"] + p["eval_s"] for p in per])
-        mean = np.mean([p["mean"] for p in per])
-        worst = max(p["max"] for p in per)
+        t = np.median([p["build_s"] + p["eval_s"] for p in per])  # median of the sums
+        agg = hdri_aggregate(approx, m)
+        mean, worst = agg["mean"], agg["max"]
         a.loglog([t, t], [mean, worst], "-", color=f"C{i}", alpha=0.5)
         a.loglog(t, mean, markers[i], color=f"C{i}", label=m)
         a.loglog(t, worst, markers[i], color=f"C{i}", mfc="none")
@@ -432,7 +431,7 @@ def plot_render(render, path):
     kept = render["sh_cycles_world"]
     a.loglog(kept["seconds"], kept["error"], "s", ms=9, mfc="none", color="C1",
              label="SH node group, Cycles 1 spp, HDRI world kept")
-    for i, e in enumerate(render["eevee"]):
+    for e in render["eevee"]:
         marker = "D" if "SH" in e["what"] else "^"
         a.loglog(e["seconds"], e["error"], marker, mfc="none" if e["attempt"] == "first" else None,
                  color=f"C{2 + ('SH' not in e['what'])}",
@@ -779,9 +778,7 @@ def write_report(path, cfg, quick, info, sweep, mips, approx, render, seconds):
     errors = [c["error"] for c in cyc]
     samples = [c["samples"] for c in cyc]
     reach = samples_to_reach(samples, errors, sh["error"])
-    tail = [i for i, n in enumerate(samples) if n >= 16] or list(range(len(samples)))
-    fit, slope = power_law_samples([samples[i] for i in tail], [errors[i] for i in tail],
-                                   sh["error"])
+    tail, fit, slope = cycles_power_law(render)
     text = []
     if reach is not None:
         c = next(c for c in cyc if c["samples"] == reach)
@@ -817,11 +814,23 @@ def write_report(path, cfg, quick, info, sweep, mips, approx, render, seconds):
 
     # ------------------------------------------------------------------ 4
     add("## 4. Which method for which goal\n")
-    add(recommendations(approx, render, mips, sweep))
+    add(recommendations(approx, render, mips, sweep, slope))
     path.write_text("\n".join(L) + "\n", encoding="utf-8")
 
 
-def recommendations(approx, render, mips, sweep):
+def cycles_power_law(render):
+    """Power-law fit of the Cycles errors (samples ≥ 16, or all if none): (indices of the
+    fitted sample counts, samples at which it reaches the SH render's error, slope b)."""
+    samples = [c["samples"] for c in render["cycles"]]
+    errors = [c["error"] for c in render["cycles"]]
+    tail = [i for i, n in enumerate(samples) if n >= 16] or list(range(len(samples)))
+    fit, slope = power_law_samples([samples[i] for i in tail], [errors[i] for i in tail],
+                                   render["sh_cycles"]["error"])
+    return tail, fit, slope
+
+
+def recommendations(approx, render, mips, sweep, slope):
+    """Section 4; ``slope``: of the Cycles error power law (``cycles_power_law``)."""
     sh = render["sh_cycles"]
     cyc = render["cycles"]
     last = cyc[-1]
@@ -832,9 +841,6 @@ def recommendations(approx, render, mips, sweep):
     eevee_sh = [e for e in render["eevee"] if "SH" in e["what"]]
     eevee_own = [e for e in render["eevee"] if "SH" not in e["what"]]
     biggest = sweep[-1]
-    samples = [c["samples"] for c in cyc]
-    tail = [i for i, n in enumerate(samples) if n >= 16] or list(range(len(samples)))
-    _, slope = power_law_samples([samples[i] for i in tail], [cyc[i]["error"] for i in tail], 1.0)
     out = []
 
     look = (f"- **Interactive look-dev (diffuse lighting, changing the light):** the SH node "
@@ -851,7 +857,7 @@ def recommendations(approx, render, mips, sweep):
                      f"{pct(eevee_own[-1]['error'])}")
         look += "."
     look += (f" Prefiltering is cheap enough to redo on every edit: "
-             f"{ms(approx_sh_time(approx))} for the {approx_shape(approx)} maps of section 2, "
+             f"{ms(a2['build_s'])} for the {approx_shape(approx)} maps of section 2, "
              f"{ms(biggest['project_s'])} for {biggest['width']}×{biggest['height']} "
              f"({biggest['ratio']:.1f}× one numpy pass over the pixels).")
     out.append(look)
@@ -896,12 +902,11 @@ def recommendations(approx, render, mips, sweep):
         f"need shadows must be path traced: at this size Cycles took {ms(last['seconds'])} "
         f"for {pct(last['error'])} noise.")
 
-    better = [m for m in map_names
-              if hdri_aggregate(approx, m)["mean"] < a2["mean"]
-              and hdri_aggregate(approx, m)["max"] < a2["max"]]
+    map_aggs = {m: hdri_aggregate(approx, m) for m in map_names}
+    better = [m for m, am in map_aggs.items() if am["mean"] < a2["mean"] and am["max"] < a2["max"]]
     if better:
         m = better[0]
-        am = hdri_aggregate(approx, m)
+        am = map_aggs[m]
         text = (f"- **Brute-force irradiance maps** are more accurate than 9 coefficients once "
                 f"they have a few hundred texels: the {m[4:]} map "
                 f"({am['build_s'] / a2['build_s']:.0f}× the SH9 prefilter time, "
@@ -937,11 +942,6 @@ def recommendations(approx, render, mips, sweep):
 def approx_shape(approx):
     h, w = next(iter(approx["hdri"].values()))["shape"]
     return f"{w}×{h}"
-
-
-def approx_sh_time(approx):
-    return float(np.median([r["methods"]["SH order 2"]["build_s"]
-                            for r in approx["hdri"].values()]))
 
 
 # ------------------------------------------------------------------------------ main

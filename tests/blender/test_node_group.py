@@ -19,8 +19,8 @@ from pathlib import Path
 import bpy
 import numpy as np
 import pytest
-from mathutils import Vector
 
+from benchmarks.render_bench import add_camera
 from sh_lighting.blender import compat, materials, nodes, scene_data
 from sh_lighting.core import irradiance, project_equirect, reference_irradiance
 
@@ -100,17 +100,6 @@ def read_exr(path):
 
 
 # ---------------------------------------------------------------- scene helpers
-
-
-def add_camera(scene, location, ortho_scale=2.3):
-    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    camera.data.type = "ORTHO"
-    camera.data.ortho_scale = ortho_scale
-    scene.collection.objects.link(camera)
-    camera.location = location
-    camera.rotation_euler = (-Vector(location)).to_track_quat("-Z", "Y").to_euler()
-    scene.camera = camera
-    return camera
 
 
 def black_world(scene):
