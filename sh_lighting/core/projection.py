@@ -196,7 +196,8 @@ def _combine(a, weights, max_order, nonfinite):
                 f"pixels contain {message}: repair the image, or pass nonfinite='zero' "
                 "to treat those texels as black"
             )
-        sums = column_sums(a, max_order, zero_nonfinite=True)
+        if count:  # else every texel is finite and the sums overflowed: reported below
+            sums = column_sums(a, max_order, zero_nonfinite=True)
     phi_index = {pair: k for k, pair in enumerate(_phi_functions(max_order))}
     coeffs = np.zeros((num_coefficients(max_order), 3))
     for t, (l, m) in enumerate(_theta_functions(max_order)):

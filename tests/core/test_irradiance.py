@@ -132,13 +132,20 @@ def test_reference_refuses_non_finite_pixels():
 
 
 def test_universal_error_bounds_on_random_non_negative_maps():
-    """|E9 - E| ≤ (3/32) P and E9 ≥ -0.0396 P for any non-negative lighting (REFERENCE.md §2)."""
+    """|E9 - E| ≤ (3/32) P and E9 ≥ -0.0396 P for any non-negative lighting (REFERENCE.md §2).
+
+    Each map has one texel holding most of the light, so the error comes near the bounds
+    (a point source attains them)."""
     rng = np.random.default_rng(9)
     n = random_directions(300, seed=4)
+    worst = 0.0
     for trial in range(5):
         pixels = rng.random((32, 64, 3)) ** 8  # spiky, non-negative
+        pixels[rng.integers(4, 28), rng.integers(64)] += 2e3  # a sun
         coeffs = project_equirect(pixels)
         power = coeffs[0] * 2.0 * sqrt(pi)
         err = np.abs(irradiance(coeffs, n) - reference_irradiance(pixels, n)) / power
         assert err.max() <= 3 / 32
         assert (irradiance(coeffs, n) / power).min() >= -0.0396
+        worst = max(worst, err.max())
+    assert worst > 0.08  # near the bound (measured 8.2–8.7 % of P), not far below it

@@ -203,7 +203,8 @@ def test_one_hot_texels_on_a_16k_map():
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
-    assert peak < 1 << 28, f"peak extra memory {peak / 2**20:.0f} MiB"  # measured ~30 MiB
+    # measured 50 MiB on 2 cores: a 25 MiB block of float64 rows per thread
+    assert peak < 1 << 28, f"peak extra memory {peak / 2**20:.0f} MiB"
     for channel, (r, c) in enumerate(places):
         expected = one_texel_integral(h, w, r, c)
         assert rel_to_max(coeffs[:, channel], expected) < ROUNDING, (r, c)
