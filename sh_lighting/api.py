@@ -121,10 +121,23 @@ def apply_to_materials(materials, scene=None):
     """
     if scene is None:
         scene = bpy.context.scene
-    return _materials.apply_to_materials(list(materials), scene)
+    return _materials.apply_to_materials(_material_list(materials), scene)
 
 
 def remove_from_materials(materials):
     """Undo ``apply_to_materials`` on ``materials``; returns which were changed or skipped."""
-    return _materials.remove_from_materials(list(materials))
+    return _materials.remove_from_materials(_material_list(materials))
+
+
+def _material_list(materials):
+    """``materials`` as a list, or a TypeError saying what to pass (one Material: [it])."""
+    if isinstance(materials, bpy.types.Material):
+        raise TypeError(f"materials is one Material ({materials.name!r}): pass a list, [material]")
+    try:
+        return list(materials)
+    except TypeError:
+        raise TypeError(
+            f"materials is {type(materials).__name__}: pass an iterable of Material, "
+            "e.g. bpy.data.materials or [material]"
+        ) from None
 

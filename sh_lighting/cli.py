@@ -108,12 +108,13 @@ def hdri_coefficients(path):
     """(coefficients (9, 3), metadata) of the equirectangular image file at ``path``."""
     from datetime import date
 
+    from .core.coefficients import check_coefficients
     from .core.projection import project_equirect
 
     images = _module("blender.images")
     try:
         pixels = images.load_image_pixels(path)
-        coeffs = project_equirect(pixels)
+        coeffs = check_coefficients(project_equirect(pixels))  # within what Blender renders
     except ValueError as error:
         raise CommandError(f"{path}: {error}") from None
     metadata = {

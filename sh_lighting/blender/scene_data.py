@@ -12,6 +12,7 @@ Reset can return to them.
 
 import numpy as np
 
+from ..core.coefficients import check_coefficients
 from ..core.sh import COEFFICIENT_NAMES
 
 # Attribute/custom-property names: "L1-1" -> "sh_L1m1" (no '-' inside an attribute name).
@@ -36,15 +37,10 @@ def get_coefficients(scene):
 
 
 def check_coefficients_9x3(coeffs):
-    """A finite (9, 3) float64 copy of ``coeffs`` or a ValueError saying what is wrong."""
-    c = np.array(coeffs, dtype=np.float64)
-    if c.shape != (9, 3):
-        raise ValueError(
-            f"SH lighting needs 9 RGB coefficients (shape (9, 3)), got shape {c.shape}"
-        )
-    if not np.isfinite(c).all():
-        raise ValueError("SH coefficients contain NaN or Inf: nothing was changed")
-    return c
+    """A finite (9, 3) float64 copy of ``coeffs`` or a ValueError saying what is wrong
+    (``core.coefficients.check_coefficients``: numbers only, within Blender's float32 range).
+    """
+    return check_coefficients(coeffs)
 
 
 def set_coefficients(scene, coeffs, computed=False):

@@ -24,6 +24,7 @@ Errors are never cached. The capture path (procedural worlds) is taken only by
 """
 
 import hashlib
+import numbers
 import os
 import time
 from dataclasses import replace
@@ -85,8 +86,17 @@ def compute_and_store(scene, capture_width=None):
         capture_width = properties.capture_width_for(
             getattr(scene, "sh_lighting", None), preferences.addon_preferences()
         )
-    coeffs, info = cached_world_coefficients(scene, capture_width=int(capture_width))
+    coeffs, info = cached_world_coefficients(scene, capture_width=_whole(capture_width))
     return properties.store_coefficients(scene, coeffs, computed=True), info
+
+
+def _whole(capture_width):
+    """``capture_width`` as an int, or a ValueError saying what to pass."""
+    if isinstance(capture_width, bool) or not isinstance(capture_width, numbers.Integral):
+        raise ValueError(
+            f"capture_width is {capture_width!r}: give a whole number of pixels, such as 256"
+        )
+    return int(capture_width)
 
 
 def clear_cache():

@@ -15,6 +15,7 @@ from math import pi, sqrt
 
 import numpy as np
 
+from .coefficients import check_coefficients as checked_coefficients
 from .equirect import check_finite_pixels, check_pixels, texel_directions, texel_solid_angles
 from .sh import band_of_each_coefficient, lambert_band_factors, order_of, sh_basis
 
@@ -38,17 +39,12 @@ CHUNK_VALUES = 1 << 22
 
 
 def check_coefficients(coeffs):
-    """Validate an ((order+1)², 3) coefficient array; returns (float64 array, order)."""
-    c = np.asarray(coeffs, dtype=np.float64)
-    if c.ndim != 2 or c.shape[1] != 3:
-        raise ValueError(
-            f"coefficients must have shape ((order+1)², 3), got {np.shape(coeffs)}: "
-            "one RGB row per L_lm, in the order L00, L1-1, L10, L11, ..."
-        )
-    order = order_of(c.shape[0])
-    if not np.isfinite(c).all():
-        raise ValueError("coefficients contain NaN or Inf: recompute or reset them")
-    return c, order
+    """Validate an ((order+1)², 3) coefficient array; returns (float64 array, order).
+
+    The project's one coefficient check (``coefficients.check_coefficients``) for any order.
+    """
+    c = checked_coefficients(coeffs, count=None)
+    return c, order_of(c.shape[0])
 
 
 def irradiance_coefficients(coeffs):

@@ -53,12 +53,11 @@ import json
 import math
 import re
 from datetime import date, datetime
-from numbers import Real
 from pathlib import Path
 
-import numpy as np
 
 from .atomic import write_text_atomic
+from .coefficients import check_coefficients, real_number
 from .sh import COEFFICIENT_NAMES
 
 FORMAT_NAME = "sh_lighting.preset"
@@ -66,7 +65,6 @@ FORMAT_VERSION = 1
 FRAME = "blender_world_z_up"
 TOP_LEVEL_KEYS = ("format", "version", "frame", "coefficients", "metadata")
 METADATA_KEYS = ("name", "source", "mapping", "strength", "created", "error_estimate", "notes")
-CHANNELS = ("R", "G", "B")
 
 
 class PresetError(ValueError):
@@ -92,20 +90,7 @@ def _type_name(value):
 
 def _finite_number(value, what):
     """``value`` as a float, or a PresetError if it is not a finite real number."""
-    if isinstance(value, bool) or not isinstance(value, Real):
-        raise PresetError(
-            f"{what} is {_type_name(value)} ({value!r}), not a number: write a number"
-        )
-    try:
-        number = float(value)
-    except OverflowError:
-        number = math.inf if value > 0 else -math.inf
-    if not math.isfinite(number):
-        raise PresetError(
-            f"{what} is {number!r}: NaN and infinite values are not allowed; "
-            "recompute the lighting or write a finite number"
-        )
-    return number
+    return real_number(value, what, PresetError, limit=math.inf)
 
 
 def _number_list(value, count, what):
@@ -148,12 +133,8 @@ def _check_coefficient_block(block):
             f"coefficients: {'; '.join(parts)}. A preset holds exactly the nine coefficients "
             f"{', '.join(COEFFICIENT_NAMES)} (index l(l+1)+m, so L1-1 is l=1, m=-1)"
         )
-    out = np.empty((9, 3))
-    for i, name in enumerate(COEFFICIENT_NAMES):
-        values = _number_list(block[name], 3, f"coefficient {name}")
-        for j, channel in enumerate(CHANNELS):
-            out[i, j] = _finite_number(values[j], f"coefficient {name} channel {channel}")
-    return out
+    rows = [block[name] for name in COEFFICIENT_NAMES]
+    return check_coefficients(rows, error=PresetError)
 
 
 def _check_metadata(metadata):
@@ -205,22 +186,9 @@ def _is_iso_date(text):
 
 
 def check_preset_coefficients(coeffs):
-    """(9, 3) float64 copy of ``coeffs``, or a PresetError (wrong shape, NaN or Inf)."""
-    try:
-        c = np.array(coeffs, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise PresetError(f"coefficients are not an array of numbers: {error}") from None
-    if c.shape != (9, 3):
-        raise PresetError(
-            f"a preset holds 9 RGB coefficients (shape (9, 3)), got shape {c.shape}: "
-            f"pass one [r, g, b] row for each of {', '.join(COEFFICIENT_NAMES)}"
-        )
-    if not np.isfinite(c).all():
-        bad = [COEFFICIENT_NAMES[i] for i in sorted(set(np.nonzero(~np.isfinite(c))[0]))]
-        raise PresetError(
-            f"coefficients {', '.join(bad)} contain NaN or Inf: recompute the lighting first"
-        )
-    return c
+    """(9, 3) float64 copy of ``coeffs``, or a PresetError (``coefficients.check_coefficients``:
+    wrong shape, not numbers, NaN, Inf, beyond float32)."""
+    return check_coefficients(coeffs, error=PresetError)
 
 
 # --- dict <-> coefficients -----------------------------------------------------------------
