@@ -14,9 +14,12 @@ Two ways to run it (``--help`` after any command shows its options):
   Add ``--python-exit-code 1`` so that an unexpected Python error also fails the process.
 
 Commands (all write their files atomically: a temporary file moved into place, so an
-interrupted run never leaves a half-written output):
+interrupted run never leaves a half-written output; a replaced file keeps its permissions,
+a symbolic link is written through to its target, no output is ever one of the command's
+inputs, and a path starting with ``//`` is relative to the .blend's folder, as in Blender):
 
-* ``compute HDRI_OR_BLEND [--out PRESET] [--overwrite] [--capture-width N] [--format F]``:
+* ``compute HDRI_OR_BLEND [--out PRESET] [--overwrite] [--capture-width N] [--format F]
+  [--nonfinite raise|zero]``:
   the 9 coefficients of an equirectangular HDRI file, or of the world of a .blend (read only,
   not saved); prints the table and, with ``--out``, writes a preset (an HDRI's preset carries
   its 9-term error estimate).
@@ -27,10 +30,12 @@ interrupted run never leaves a half-written output):
 * ``render [BLEND] --output PATH [--frame N | --frames A B] [--engine E] [--samples N]``:
   renders frames headless; PATH follows Blender's ``-o`` rules (``#`` → frame number, else 4
   digits appended; the format's extension added). Existing frames are replaced, like Blender.
-* ``batch HDRI_DIR OUT_DIR [--force] [--pattern '*.exr,*.hdr']``: one preset per HDRI,
-  ``OUT_DIR/<stem>.json``, a progress line per file and a total; existing presets are kept
-  unless ``--force`` (so an interrupted batch resumes); a bad file is reported and the others
-  are still processed.
+* ``batch HDRI_DIR OUT_DIR [--force] [--pattern '*.exr,*.hdr'] [--nonfinite raise|zero]``:
+  one preset per HDRI, ``OUT_DIR/<stem>.json``, a progress line per file and a total;
+  existing presets are kept unless ``--force`` (so an interrupted batch resumes; the
+  temporary files a killed batch left are removed and reported); a bad file, and anything
+  matching the pattern that is not a readable file (a folder, a broken link), is reported
+  and the others are still processed.
 
 Exit status: 0 on success, 1 when a command (or any file of a batch) failed, 2 for wrong
 arguments or when the package cannot be found. Errors go to stderr as ``sh_lighting: error:``.
@@ -41,7 +46,9 @@ import fnmatch
 import importlib
 import os
 import sys
+import tempfile
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 PROG = "python -m sh_lighting"
@@ -104,17 +111,48 @@ def error_estimate(pixels, coeffs, count=ERROR_NORMALS):
     return {"mean": mean, "max": largest}
 
 
-def hdri_coefficients(path):
-    """(coefficients (9, 3), metadata) of the equirectangular image file at ``path``."""
+@contextmanager
+def library_output_captured():
+    """Send what C libraries print on stderr (file descriptor 2) during the block to a
+    temporary file instead of the terminal ("EXR_ERR_READ_IO", "libpng error" beside our own
+    one-line message); yields a function returning that text."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as capture:
+        os.dup2(capture.fileno(), 2)
+        try:
+            yield lambda: (capture.seek(0), capture.read().decode("utf-8", "replace"))[1]
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
+def hdri_coefficients(path, nonfinite="raise"):
+    """(coefficients (9, 3), metadata) of the equirectangular image file at ``path``.
+
+    ``nonfinite``: "raise" refuses NaN/Inf texels, "zero" treats them as black.
+    """
     from datetime import date
 
+    import numpy as np
+
     from .core.coefficients import check_coefficients
+    from .core.equirect import NonFiniteError
     from .core.projection import project_equirect
 
     images = _module("blender.images")
     try:
-        pixels = images.load_image_pixels(path)
-        coeffs = check_coefficients(project_equirect(pixels))  # within what Blender renders
+        with library_output_captured():
+            pixels = images.load_image_pixels(path)
+        if nonfinite == "zero" and not np.isfinite(pixels[..., :3]).all():
+            pixels = np.where(np.isfinite(pixels), pixels, np.float32(0.0))  # for the estimate
+        coeffs = check_coefficients(project_equirect(pixels, nonfinite=nonfinite))
+    except NonFiniteError as error:
+        raise CommandError(
+            f"{path}: the image has {error.description}: repair the image, or pass "
+            "--nonfinite zero to treat those texels as black"
+        ) from None
     except ValueError as error:
         raise CommandError(f"{path}: {error}") from None
     metadata = {
@@ -134,19 +172,98 @@ def hdri_coefficients(path):
     return coeffs, metadata
 
 
-def _check_new_file(path, overwrite, flag="--overwrite"):
-    """Fail early, before any work, when ``path`` exists or its folder is missing."""
+# --- paths: inputs, outputs, // and leftovers -----------------------------------------------
+
+
+def input_file(path, what, hint):
+    """``path`` as a Path if it is an existing regular file, else a CommandError saying what
+    it is instead (missing, a folder, a broken link, a device) and ``hint``."""
+    path = Path(path)
+    if path.is_file():
+        return path
+    if path.is_dir():
+        raise CommandError(f"{what} '{path}' is a folder, not a file: {hint}")
+    if path.is_symlink():
+        raise CommandError(f"{what} '{path}' is a broken symbolic link (its target "
+                           f"'{os.readlink(path)}' does not exist): {hint}")
+    if path.exists():
+        raise CommandError(f"{what} '{path}' is not a regular file: {hint}")
+    raise CommandError(f"{what} '{path}' does not exist: {hint}")
+
+
+def open_file():
+    """The path of the .blend Blender has open (under ``blender file.blend -P``), or None."""
+    import bpy
+
+    return Path(bpy.data.filepath) if bpy.data.filepath else None
+
+
+def blend_relative(path, blend, flag):
+    """``path`` (text) as a Path, a leading ``//`` taken relative to the folder of the .blend
+    ``blend`` as Blender does; a CommandError when there is no .blend to be relative to."""
+    if path is None:
+        return None
+    text = os.fspath(path)
+    if not text.startswith("//"):
+        return Path(text)
+    if blend is None:
+        raise CommandError(
+            f"{flag} '{text}' starts with //, Blender's 'relative to the .blend file', but "
+            "there is no .blend here: give the path without //"
+        )
+    return Path(os.path.dirname(os.path.abspath(blend))) / text[2:]
+
+
+def same_file(a, b):
+    """Whether paths ``a`` and ``b`` are one file (links, .., hard links: any path to it)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one does not exist (yet): compare where they lead
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def refuse_inputs(out, flag, inputs, advice="choose another name"):
+    """A CommandError when ``out`` is one of ``inputs`` ({what: path}): no output ever
+    replaces an input, whatever --overwrite says (checked before any other advice)."""
+    for what, path in inputs.items():
+        if path is not None and same_file(out, path):
+            raise CommandError(
+                f"{flag} '{out}' is the {what} '{path}' (the same file): an output never "
+                f"replaces an input; {advice}"
+            )
+
+
+def check_new_file(path, overwrite, flag="--overwrite"):
+    """Fail early, before any work, when ``path`` cannot be written as a new file."""
+    from .core.atomic import real_destination
+
     path = Path(path)
     if path.is_dir():
         raise CommandError(f"'{path}' is a folder: give a file name")
     if path.exists() and not overwrite:
         raise CommandError(f"'{path}' already exists: choose another name, or pass {flag}")
-    if not path.parent.is_dir():
-        raise CommandError(f"folder '{path.parent}' does not exist: create it first")
+    folder = real_destination(path).parent
+    if folder.exists() and not folder.is_dir():
+        raise CommandError(f"'{folder}' is a file, not a folder: '{path}' cannot be written")
+    if not folder.is_dir():
+        raise CommandError(f"folder '{folder}' does not exist: create it first")
 
 
-def open_blend(path):
-    """Open the .blend at ``path`` (None: keep the file Blender has open); returns its path."""
+def remove_own_leftovers(path):
+    """Delete the temporary files a killed run left for the output ``path``; say so."""
+    from .core.atomic import real_destination, remove_leftovers
+
+    real = real_destination(path)
+    for leftover in remove_leftovers(real.parent, real.name):
+        _print(f"removed {leftover.name}, left in {leftover.parent} by an interrupted run")
+
+
+def open_blend(path, load_ui=False):
+    """Open the .blend at ``path`` (None: keep the file Blender has open); returns its path.
+
+    ``load_ui``: also load its workspaces and screens (a file that is saved again keeps the
+    user's layout).
+    """
     import bpy
 
     if path is None:
@@ -155,11 +272,9 @@ def open_blend(path):
                 "no .blend given and none is open: pass the .blend file as an argument"
             )
         return Path(bpy.data.filepath)
-    path = Path(path)
-    if not path.is_file():
-        raise CommandError(f".blend file '{path}' does not exist")
+    path = input_file(path, ".blend file", "give a .blend file")
     try:
-        bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
+        bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=load_ui)
     except RuntimeError as error:
         raise CommandError(f"Blender could not open '{path}': {error}") from None
     return path
@@ -187,6 +302,7 @@ def save_blend(path, overwrite):
 
     from .core.atomic import atomic_destination
 
+    remove_own_leftovers(path)
     with atomic_destination(path, overwrite, suffix=".blend", what=".blend file",
                             hint="pass --overwrite") as temporary:
         bpy.ops.wm.save_as_mainfile(filepath=str(temporary), copy=True)
@@ -198,10 +314,18 @@ def save_blend(path, overwrite):
 
 def cmd_compute(args):
     preset_io = _module("blender.preset_io")
-    if args.out is not None:
-        _check_new_file(args.out, args.overwrite)
+    is_blend = args.input is None or Path(args.input).suffix.lower() == ".blend"
+    if args.input is not None:
+        hint = "give a .blend file" if is_blend else "give an HDRI image or a .blend file"
+        source = input_file(args.input, ".blend file" if is_blend else "HDRI", hint)
+    else:
+        source = open_file()
+    out = blend_relative(args.out, source if is_blend else open_file(), "--out")
+    if out is not None:
+        refuse_inputs(out, "--out", {".blend file" if is_blend else "HDRI": source})
+        check_new_file(out, args.overwrite)
     start = time.perf_counter()
-    if args.input is None or Path(args.input).suffix.lower() == ".blend":
+    if is_blend:
         api = _module("api")
         source = open_blend(args.input)
         scene = pick_scene(args.scene)
@@ -216,10 +340,7 @@ def cmd_compute(args):
         metadata["notes"] = f"Computed from world '{scene.world.name}' of {source.name} ({how})."
         _print(f"World '{scene.world.name}' of {source} (scene '{scene.name}', from {how})")
     else:
-        source = Path(args.input)
-        if not source.is_file():
-            raise CommandError(f"'{source}' does not exist: give an HDRI image or a .blend file")
-        coeffs, metadata = hdri_coefficients(source)
+        coeffs, metadata = hdri_coefficients(source, args.nonfinite)
         _print(f"HDRI {source}")
     elapsed = time.perf_counter() - start
     _print("Lighting coefficients L_lm (raw radiance, Blender world axes, z up):")
@@ -232,10 +353,11 @@ def cmd_compute(args):
             f"mean {100 * estimate['mean']:.2f} %, max {100 * estimate['max']:.2f} %"
         )
     _print(f"Computed in {elapsed:.2f} s")
-    if args.out is not None:
+    if out is not None:
+        remove_own_leftovers(out)
         try:
             path = preset_io.export_coefficients(
-                coeffs, args.out, args.format, args.overwrite, metadata
+                coeffs, out, args.format, args.overwrite, metadata
             )
         except (OSError, ValueError) as error:
             raise CommandError(str(error)) from None
@@ -243,31 +365,46 @@ def cmd_compute(args):
     return 0
 
 
-def cmd_apply(args):
+def read_preset_argument(text, blend):
+    """The (coefficients, metadata) of the PRESET argument (``//`` relative to ``blend``)."""
     from .core.presets import PresetError
 
-    api = _module("api")
-    preset_io = _module("blender.preset_io")
-    operators = _module("blender.operators")
+    path = blend_relative(text, blend, "PRESET")
     try:
-        coeffs, _metadata = preset_io.read_preset_file(args.preset)
+        return path, _module("blender.preset_io").read_preset_file(path)[0]
     except (PresetError, OSError) as error:
         raise CommandError(str(error)) from None
-    if args.out is not None:
-        _check_new_file(args.out, args.overwrite)
-    blend = open_blend(args.blend)
-    if args.out is not None and Path(args.out).exists() and os.path.samefile(blend, args.out):
-        raise CommandError("--out is the input file: use --in-place to replace it")
-    scene = pick_scene(args.scene)
-    if args.objects:
-        missing = [name for name in args.objects if scene.objects.get(name) is None]
-        if missing:
-            raise CommandError(
-                f"no object(s) {', '.join(map(repr, missing))} in scene '{scene.name}'"
-            )
-        objects = [scene.objects[name] for name in args.objects]
+
+
+def objects_to_apply(scene, names):
+    """The objects named ``names`` (all of the scene's when None), or a CommandError."""
+    if not names:
+        return list(scene.objects)
+    missing = [name for name in names if scene.objects.get(name) is None]
+    if missing:
+        raise CommandError(
+            f"no object(s) {', '.join(map(repr, missing))} in scene '{scene.name}'"
+        )
+    return [scene.objects[name] for name in names]
+
+
+def cmd_apply(args):
+    api = _module("api")
+    operators = _module("blender.operators")
+    if args.blend is not None:
+        blend = input_file(args.blend, ".blend file", "give the .blend file to change")
     else:
-        objects = list(scene.objects)
+        blend = open_file()
+    preset, coeffs = read_preset_argument(args.preset, blend)
+    out = blend if args.in_place else blend_relative(args.out, blend, "--out")
+    if not args.in_place:
+        refuse_inputs(out, "--out", {".blend file": blend},
+                      advice="use --in-place to replace it")
+        refuse_inputs(out, "--out", {"preset": preset})
+        check_new_file(out, args.overwrite)
+    blend = open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
+    scene = pick_scene(args.scene)
+    objects = objects_to_apply(scene, args.objects)
     api.set_coefficients(scene, coeffs)
     result = api.apply_to_materials(operators.materials_of(objects), scene)
     for name, reason in result.skipped:
@@ -278,7 +415,6 @@ def cmd_apply(args):
         )
     _print(f"SH lighting applied to {len(result.changed)} material(s): "
            + ", ".join(result.changed))
-    out = blend if args.in_place else Path(args.out)
     try:
         save_blend(out, overwrite=args.in_place or args.overwrite)
     except (OSError, RuntimeError) as error:
@@ -288,14 +424,15 @@ def cmd_apply(args):
 
 
 def _frames(args, scene):
+    """The frames to render, a range (never a list: --frames 1 3000000 costs nothing)."""
     if args.frame is not None:
-        return [args.frame]
+        return range(args.frame, args.frame + 1)
     if args.frames is not None:
         first, last = args.frames
         if last < first:
             raise CommandError(f"--frames {first} {last}: the last frame comes before the first")
-        return list(range(first, last + 1))
-    return [scene.frame_current]
+        return range(first, last + 1)
+    return range(scene.frame_current, scene.frame_current + 1)
 
 
 def _set_engine(scene, engine, samples):
@@ -311,13 +448,52 @@ def _set_engine(scene, engine, samples):
             raise CommandError(f"--samples does not apply to engine {scene.render.engine}")
 
 
-def cmd_render(args):
+def frame_target(scene, output, frame):
+    """The file frame ``frame`` of ``output`` goes to (Blender's -o rules), as a Path."""
+    import bpy
+
+    scene.render.filepath = output
+    return Path(bpy.path.abspath(scene.render.frame_path(frame=frame)))
+
+
+def render_frame(scene, output, frame, target, blend):
+    """Render ``frame`` into ``target`` atomically; a CommandError if it cannot be written."""
     import bpy
 
     from .core.atomic import atomic_destination
 
+    refuse_inputs(target, "--output", {".blend file": blend})
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise CommandError(
+            f"cannot create the folder of frame {frame}, '{target.parent}': "
+            f"{error.strerror}{' (a file is in the way)' if _file_in_way(target) else ''}"
+        ) from None
+    remove_own_leftovers(target)
+    scene.frame_set(frame)
+    try:
+        with atomic_destination(target, overwrite=True, suffix=target.suffix,
+                                what="render output") as temporary:
+            scene.render.filepath = str(temporary)
+            try:
+                bpy.ops.render.render(write_still=True, scene=scene.name)
+            finally:
+                scene.render.filepath = output
+    except (OSError, RuntimeError) as error:
+        raise CommandError(f"frame {frame} could not be written: {error}") from None
+
+
+def _file_in_way(path):
+    """Whether a file (not a folder) stands where one of ``path``'s folders should be."""
+    return any(p.exists() and not p.is_dir() for p in Path(path).parents)
+
+
+def cmd_render(args):
+    if not args.output.strip():
+        raise CommandError("--output is empty: give a path such as renders/shot_####")
     scene_data = _module("blender.scene_data")
-    open_blend(args.blend)
+    blend = open_blend(args.blend)
     scene = pick_scene(args.scene)
     _set_engine(scene, args.engine, args.samples)
     frames = _frames(args, scene)
@@ -328,48 +504,95 @@ def cmd_render(args):
         )
     if not scene_data.has_coefficients(scene):
         _print(f"warning: scene '{scene.name}' has no SH coefficients: it renders without them")
-    render = scene.render
-    render.filepath = args.output
-    targets = [Path(bpy.path.abspath(render.frame_path(frame=f))) for f in frames]
     start = time.perf_counter()
-    for index, (frame, target) in enumerate(zip(frames, targets), start=1):
+    for index, frame in enumerate(frames, start=1):
         t0 = time.perf_counter()
-        target.parent.mkdir(parents=True, exist_ok=True)
-        scene.frame_set(frame)
-        with atomic_destination(target, overwrite=True, suffix=target.suffix,
-                                what="render output") as temporary:
-            render.filepath = str(temporary)
-            try:
-                bpy.ops.render.render(write_still=True, scene=scene.name)
-            finally:
-                render.filepath = args.output
+        target = frame_target(scene, args.output, frame)
+        render_frame(scene, args.output, frame, target, blend)
         _print(f"[{index}/{len(frames)}] frame {frame}: {target} "
                f"({time.perf_counter() - t0:.2f} s)")
-    _print(f"Rendered {len(frames)} frame(s) with {render.engine} in "
+    _print(f"Rendered {len(frames)} frame(s) with {scene.render.engine} in "
            f"{time.perf_counter() - start:.2f} s")
     return 0
 
 
+def _kind(path):
+    """What a directory entry that is not a regular file is, for a message."""
+    if path.is_dir():
+        return "a folder, not a file"
+    if path.is_symlink() and not path.exists():
+        return f"a broken symbolic link (its target '{os.readlink(path)}' does not exist)"
+    return "not a regular file"
+
+
 def _hdri_files(folder, patterns):
+    """The entries of ``folder`` matching ``patterns`` (any case), sorted by name."""
     wanted = [p.strip().lower() for p in patterns.split(",") if p.strip()]
     if not wanted:
         raise CommandError(f"--pattern {patterns!r} holds no pattern")
     return sorted(
         (p for p in folder.iterdir()
-         if p.is_file() and any(fnmatch.fnmatchcase(p.name.lower(), w) for w in wanted)),
+         if any(fnmatch.fnmatchcase(p.name.lower(), w) for w in wanted)),
         key=lambda p: p.name.lower(),
     )
 
 
-def cmd_batch(args):
-    preset_io = _module("blender.preset_io")
+def batch_folders(args):
+    """(HDRI folder, output folder created if need be), or a CommandError saying why not."""
     folder, out_dir = Path(args.hdri_dir), Path(args.out_dir)
     if not folder.is_dir():
-        raise CommandError(f"HDRI folder '{folder}' does not exist")
+        what = "is a file, not a folder" if folder.exists() else "does not exist"
+        raise CommandError(f"HDRI folder '{folder}' {what}: give the folder of the HDRIs")
+    if out_dir.exists() and not out_dir.is_dir():
+        raise CommandError(f"OUT_DIR '{out_dir}' is a file, not a folder: give a folder")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        in_way = " (a file is in the way)" if _file_in_way(out_dir) else ""
+        raise CommandError(
+            f"cannot create OUT_DIR '{out_dir}': {error.strerror}{in_way}"
+        ) from None
+    return folder, out_dir
+
+
+def remove_batch_leftovers(out_dir):
+    """Remove the temporary preset files a killed batch left in ``out_dir``; say so."""
+    from .core.atomic import leftovers
+
+    removed = []
+    for path in leftovers(out_dir):
+        if path.name.endswith(".tmp") and ".json." in path.name:
+            try:
+                path.unlink()
+            except OSError as error:
+                _print(f"could not remove {path.name}, left by an interrupted run: {error}")
+                continue
+            removed.append(path.name)
+    if removed:
+        _print(f"removed {len(removed)} temporary file(s) left in {out_dir} by an interrupted "
+               f"run: {', '.join(removed)}")
+
+
+def batch_one(path, out, args, inputs):
+    """Write the preset of HDRI ``path`` to ``out``: "ok" or "skipped"; raises on failure."""
+    if not path.is_file():
+        raise CommandError(_kind(path))
+    clash = next((p for p in inputs if same_file(out, p)), None)
+    if clash is not None:
+        raise CommandError(f"its preset {out.name} would replace the input {clash.name}")
+    if out.exists() and not args.force:
+        return "skipped"
+    coeffs, metadata = hdri_coefficients(path, args.nonfinite)
+    _module("blender.preset_io").export_coefficients(coeffs, out, "sh_lighting", True, metadata)
+    return "ok"
+
+
+def cmd_batch(args):
+    folder, out_dir = batch_folders(args)
     files = _hdri_files(folder, args.pattern)
     if not files:
         raise CommandError(f"no file matching {args.pattern} in '{folder}'")
-    out_dir.mkdir(parents=True, exist_ok=True)
+    remove_batch_leftovers(out_dir)
     counts = {"ok": 0, "skipped": 0, "failed": 0}
     failed, claimed = [], {}
     start = time.perf_counter()
@@ -381,20 +604,18 @@ def cmd_batch(args):
             if out.name in claimed:
                 raise CommandError(f"its preset name {out.name} is taken by {claimed[out.name]}")
             claimed[out.name] = path.name
-            if out.exists() and not args.force:
-                counts["skipped"] += 1
-                _print(f"{prefix}: skipped ({out.name} exists; --force to redo)")
-                continue
-            coeffs, metadata = hdri_coefficients(path)
-            preset_io.export_coefficients(coeffs, out, "sh_lighting", True, metadata)
+            outcome = batch_one(path, out, args, files)
         except (CommandError, OSError, ValueError) as error:
             counts["failed"] += 1
             failed.append(path.name)
             _print(f"{prefix}: FAILED ({time.perf_counter() - t0:.2f} s)")
             print(f"sh_lighting: error: {path.name}: {error}", file=sys.stderr, flush=True)
             continue
-        counts["ok"] += 1
-        _print(f"{prefix}: ok ({time.perf_counter() - t0:.2f} s)")
+        counts[outcome] += 1
+        if outcome == "skipped":
+            _print(f"{prefix}: skipped ({out.name} exists; --force to redo)")
+        else:
+            _print(f"{prefix}: ok ({time.perf_counter() - t0:.2f} s)")
     _print(
         f"{len(files)} file(s): {counts['ok']} ok, {counts['skipped']} skipped, "
         f"{counts['failed']} failed in {time.perf_counter() - start:.2f} s"
@@ -408,10 +629,19 @@ def cmd_batch(args):
 
 
 def _positive(text):
-    value = int(text)
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
     if value <= 0:
-        raise argparse.ArgumentTypeError(f"{text} is not a positive whole number")
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive whole number")
     return value
+
+
+def _add_nonfinite(parser):
+    parser.add_argument("--nonfinite", choices=("raise", "zero"), default="raise",
+                        help="NaN or infinite texels: refuse the image (raise, the default) "
+                        "or treat them as black (zero)")
 
 
 def build_parser(prog=PROG):
@@ -443,6 +673,7 @@ def build_parser(prog=PROG):
                    help="width of the Cycles capture of a procedural world (default: the "
                    "scene's setting, else 256)")
     p.add_argument("--scene", metavar="NAME", help="scene of the .blend (default: active)")
+    _add_nonfinite(p)
     p.set_defaults(run=cmd_compute)
 
     p = commands.add_parser(
@@ -504,6 +735,7 @@ def build_parser(prog=PROG):
     p.add_argument("--pattern", default=DEFAULT_PATTERNS, metavar="GLOBS",
                    help=f"comma-separated file name patterns, any case (default: "
                    f"{DEFAULT_PATTERNS})")
+    _add_nonfinite(p)
     p.set_defaults(run=cmd_batch)
     return parser
 

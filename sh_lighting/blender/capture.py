@@ -20,7 +20,9 @@ How, without touching the user's scene:
 * the still is written as a 32-bit float OpenEXR in a ``tempfile`` directory (headless bpy
   cannot read the 'Render Result' pixels), read back, and everything temporary is removed:
   files, image, camera, object, world copy, scene. A 'Render Result' image that did not exist
-  before is removed too.
+  before is removed too. The directory is named ``sh_lighting_capture_<process id>_...``; one
+  a killed capture left (its process gone) is removed by the next capture
+  (``remove_stale_captures``).
 
 A sun much smaller than a pixel (a Sky Texture's is 0.545° wide and carries ~85% of its light)
 is hit by too few of a pixel's samples: its light came out anywhere from 0% to +35% wrong at
@@ -36,8 +38,10 @@ camera something else than it lights the scene with is captured as the camera se
 
 import math
 import os
+import re
 import shutil
 import tempfile
+import time
 
 import bpy
 import numpy as np
@@ -58,8 +62,49 @@ REFINE_PIXELS = 1 << 16
 CAMERA_ROTATION = (math.pi / 2.0, 0.0, -math.pi / 2.0)
 
 
+CAPTURE_PREFIX = "sh_lighting_capture_"
+# A capture folder without a process id (made by earlier versions) is stale after this long.
+STALE_SECONDS = 3600.0
+
+
 class CaptureError(RuntimeError):
     """The world could not be rendered; the message says why and what to do."""
+
+
+def _running(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: it runs
+        return True
+    return True
+
+
+def remove_stale_captures(folder=None, now=None):
+    """Delete the capture folders killed runs left in ``folder`` (the system temp folder):
+    those whose process id is no longer running, and id-less ones (earlier versions) older
+    than STALE_SECONDS. Returns the paths removed; a folder that cannot be removed is left."""
+    folder = tempfile.gettempdir() if folder is None else folder
+    now = time.time() if now is None else now
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for entry in entries:
+        if not entry.name.startswith(CAPTURE_PREFIX) or not entry.is_dir(follow_symlinks=False):
+            continue
+        pid = re.match(r"(\d+)_", entry.name[len(CAPTURE_PREFIX):])
+        try:
+            stale = (not _running(int(pid[1])) if pid else
+                     now - entry.stat(follow_symlinks=False).st_mtime > STALE_SECONDS)
+            if stale and int(pid[1] if pid else -1) != os.getpid():
+                shutil.rmtree(entry.path)
+                removed.append(entry.path)
+        except OSError:
+            continue
+    return removed
 
 
 def _set_cycles(scene):
@@ -192,7 +237,8 @@ def capture_world(world, width=256, samples=DEFAULT_SAMPLES, frame=None, refine=
         frame = bpy.context.scene.frame_current if bpy.context.scene else 1
 
     had_render_result = {image.name for image in bpy.data.images if image.type == "RENDER_RESULT"}
-    directory = tempfile.mkdtemp(prefix="sh_lighting_capture_")
+    remove_stale_captures()
+    directory = tempfile.mkdtemp(prefix=f"{CAPTURE_PREFIX}{os.getpid()}_")
     path = os.path.join(directory, "world.exr")
     scene = camera_data = camera = copy = None
     try:

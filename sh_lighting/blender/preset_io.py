@@ -36,6 +36,7 @@ version of the preset's name; removing one never touches the shipped folder.
 import json
 import os
 import re
+import unicodedata
 from datetime import date
 from pathlib import Path
 
@@ -44,7 +45,7 @@ import numpy as np
 
 from ..core import atomic
 from ..core.interop import to_filament_sh_txt, to_gltf_irradiance_coefficients, to_threejs_sh
-from ..core.presets import PresetError, preset_to_json, read_preset
+from ..core.presets import preset_to_json, read_preset
 from . import properties, scene_data
 from . import world as world_module
 
@@ -58,6 +59,7 @@ FORMATS = {
 PRESET_SUBDIR = "sh_lighting"
 PRESET_EXTENSION = ".json"
 MAX_NAME_LENGTH = 64
+MAX_NAME_BYTES = 200  # of UTF-8: file systems allow 255 bytes per name, ".json" included
 GENERATOR = "sh_lighting"
 OVERWRITE_HINT = "enable Overwrite (overwrite=True) to replace it"
 
@@ -107,12 +109,17 @@ def user_presets():
 
 
 def preset_file_name(name):
-    """The file name of a user preset called ``name``: letters, digits, ``-`` and ``_`` kept,
-    every other run of characters replaced by one ``_``; ValueError if nothing is left.
+    """The file name of a user preset called ``name``: letters and digits of any script
+    ("Студия", "スタジオ", "Ümlaut"), ``-`` and ``_`` kept (NFC-normalised), every other run
+    of characters (spaces, path separators, punctuation) replaced by one ``_``; at most
+    MAX_NAME_LENGTH characters and MAX_NAME_BYTES bytes; ValueError if nothing is left.
     """
     if not isinstance(name, str):
         raise ValueError(f"a preset name is text, got {type(name).__name__}")
-    stem = re.sub(r"[^A-Za-z0-9_-]+", "_", name.strip()).strip("_")[:MAX_NAME_LENGTH]
+    text = unicodedata.normalize("NFC", name.strip())
+    stem = re.sub(r"[^\w-]+", "_", text).strip("_")[:MAX_NAME_LENGTH]
+    while len(stem.encode("utf-8")) > MAX_NAME_BYTES:
+        stem = stem[:-1]
     if not stem:
         raise ValueError(
             f"preset name {name!r} has no letters or digits: give it a name such as 'Studio Warm'"
@@ -147,6 +154,21 @@ def scene_metadata(scene):
 
 
 # --- export / import -----------------------------------------------------------------------
+
+
+def file_path(path):
+    """``path`` as a Path, a leading ``//`` taken relative to the open .blend's folder (as
+    Blender's own paths); a ValueError when the file was never saved (nothing to be relative
+    to)."""
+    text = os.fspath(path)
+    if not text.startswith("//"):
+        return Path(text)
+    if not bpy.data.filepath:
+        raise ValueError(
+            f"'{text}' is relative to the .blend file (//), but this file was never saved: "
+            "save it first, or give a path without //"
+        )
+    return Path(bpy.path.abspath(text))
 
 
 def _format_id(format):
@@ -204,6 +226,7 @@ def export_preset(scene, path, format="sh_lighting", overwrite=False, metadata=N
     if the scene has no coefficients, FileExistsError if ``path`` exists and ``overwrite`` is
     false; in every error case nothing is written.
     """
+    path = file_path(path)
     coeffs = scene_data.get_coefficients(scene)
     merged = scene_metadata(scene)
     merged.update(metadata or {})
@@ -212,11 +235,8 @@ def export_preset(scene, path, format="sh_lighting", overwrite=False, metadata=N
 
 def read_preset_file(path):
     """(coefficients (9, 3), metadata) of our preset JSON at ``path``; PresetError if invalid,
-    OSError (FileNotFoundError, ...) if unreadable."""
-    path = Path(path)
-    if path.is_dir():
-        raise PresetError(f"'{path}' is a folder: choose a preset file (.json)")
-    return read_preset(path)
+    OSError (FileNotFoundError, ...) if unreadable; ``//`` as in ``file_path``."""
+    return read_preset(file_path(path))
 
 
 def import_preset(scene, path):
@@ -263,8 +283,11 @@ def _user_preset_path(folder, name):
         and os.path.basename(name) == name
     ):
         exact = folder / (name + PRESET_EXTENSION)
-        if exact.is_file():
-            return exact
+        try:
+            if exact.is_file():
+                return exact
+        except OSError:  # e.g. a name too long to be a file name: not a file of ours
+            pass
     return folder / preset_file_name(name)
 
 

@@ -1,10 +1,18 @@
 """Atomic file writes: a file is either fully written or untouched, never half-written.
 
 ``write_text_atomic`` writes the whole text to a temporary file in the destination's folder
-(``.<name>.<random>.tmp``, created with O_EXCL so nothing existing is reused), flushes it to
-disk, then moves it over the destination with ``os.replace`` (atomic on POSIX and Windows for
-a file in the same folder). On any error, KeyboardInterrupt included, the temporary file is
-removed and the destination keeps its previous content (or stays absent).
+(``.<name>.<12 hex digits><suffix>``, created with O_EXCL so nothing existing is reused),
+flushes it to disk, then moves it over the destination with ``os.replace`` (atomic on POSIX
+and Windows for a file in the same folder). On any error, KeyboardInterrupt included, the
+temporary file is removed and the destination keeps its previous content (or stays absent).
+
+What a replaced file keeps, and where the bytes go:
+
+* its permission bits (a 0600 file stays private, a 0444 one read-only) and, where the
+  system allows it (the same user, or root), its owner and group; a new file gets the
+  permissions the umask gives;
+* a destination that is a symbolic link is written through: the link's target is replaced
+  (the temporary file sits beside the target) and the link stays a link.
 
 An existing destination is only replaced with ``overwrite=True``. Existence is checked before
 writing and again just before the move; a file created by another program between that last
@@ -12,34 +20,129 @@ check and the move is replaced (no portable way to refuse it exists).
 
 ``atomic_destination`` hands out such a temporary path for writers that are not plain text
 (e.g. a program that writes the file itself) and does the same checks and the final move.
+
+What a kill leaves: a process killed (SIGKILL, power loss) between creating the temporary
+file and the move leaves that hidden temporary file beside the destination, and the
+destination as it was. ``leftovers`` finds them by their name and ``remove_leftovers``
+deletes them; the command line does so at its next run for the files it writes.
 """
 
+import errno
 import os
+import re
 import secrets
+import stat
 from contextlib import contextmanager
 from pathlib import Path
+
+_TOKEN_DIGITS = 12  # secrets.token_hex(6)
+_LEFTOVER = re.compile(rf"^\.(?P<name>.+)\.[0-9a-f]{{{_TOKEN_DIGITS}}}(?P<suffix>\.[^.]+)$")
 
 
 def _exists_error(path, what, hint):
     return FileExistsError(f"{what} '{path}' already exists: choose another name, or {hint}")
 
 
+def real_destination(path):
+    """Where writing ``path`` puts the bytes: the target of a symbolic link (followed to the
+    end, relative links resolved against the link's folder), else ``path`` itself."""
+    path = Path(path)
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
 def _check_destination(path, overwrite, what, hint):
+    """The real destination of ``path`` (``real_destination``), or a clear OSError."""
     path = Path(path)
     if path.is_dir():
         raise IsADirectoryError(f"{what} '{path}' is a folder: give a file name")
     if not overwrite and path.exists():
         raise _exists_error(path, what, hint)
-    folder = path.parent
+    real = real_destination(path)
+    if real.is_dir():
+        raise IsADirectoryError(f"{what} '{path}' links to a folder: give a file name")
+    folder = real.parent
+    if folder.exists() and not folder.is_dir():
+        raise NotADirectoryError(f"'{folder}' is a file, not a folder: {what} '{path}' "
+                                 "cannot be written under it")
     if not folder.is_dir():
         raise FileNotFoundError(f"folder '{folder}' does not exist: create it first")
-    return path
+    return real
 
 
 def temporary_path(path, suffix=".tmp"):
     """A fresh hidden path next to ``path`` (same folder, so ``os.replace`` is atomic)."""
     path = Path(path)
-    return path.parent / f".{path.name}.{secrets.token_hex(6)}{suffix}"
+    return path.parent / f".{path.name}.{secrets.token_hex(_TOKEN_DIGITS // 2)}{suffix}"
+
+
+def leftovers(folder, name=None):
+    """The temporary files of interrupted writes in ``folder`` (sorted), all of them or
+    only those of the destination file ``name``."""
+    folder = Path(folder)
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return []
+    found = []
+    for entry in entries:
+        match = _LEFTOVER.match(entry.name)
+        if match and (name is None or match["name"] == name) and entry.is_file(
+            follow_symlinks=False
+        ):
+            found.append(folder / entry.name)
+    return sorted(found)
+
+
+def remove_leftovers(folder, name=None):
+    """Delete ``leftovers(folder, name)``; returns the paths removed (a file that cannot be
+    removed is left and not listed)."""
+    removed = []
+    for path in leftovers(folder, name):
+        try:
+            os.unlink(path)
+        except OSError:
+            continue
+        removed.append(path)
+    return removed
+
+
+def _create(temporary, what, path):
+    """Create ``temporary`` with O_EXCL (0o666: the umask decides); returns its fd.
+
+    A folder that cannot be written is reported by the destination's name, not ours.
+    """
+    try:
+        return os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    except OSError as error:
+        if error.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+            raise PermissionError(
+                error.errno,
+                f"cannot write {what} '{path}': folder '{temporary.parent}' is not writable "
+                f"({os.strerror(error.errno)}); choose another folder or change its permissions",
+            ) from None
+        raise OSError(error.errno, f"cannot write {what} '{path}': {os.strerror(error.errno)}") \
+            from None
+
+
+def _keep_mode_and_owner(temporary, real):
+    """Give ``temporary`` the permission bits (and owner, where allowed) of ``real``."""
+    try:
+        st = os.stat(real)
+    except FileNotFoundError:
+        return  # a new file: the umask's permissions
+    os.chmod(temporary, stat.S_IMODE(st.st_mode))
+    if not hasattr(os, "chown"):
+        return
+    mine = os.stat(temporary)
+    for uid, gid in ((st.st_uid, st.st_gid), (-1, st.st_gid)):
+        if (mine.st_uid, mine.st_gid) == (st.st_uid, st.st_gid):
+            return
+        try:  # only root may give a file away; a group of ours may still be kept
+            os.chown(temporary, uid, gid)
+            os.chmod(temporary, stat.S_IMODE(st.st_mode))  # chown may clear set-id bits
+            return
+        except OSError:
+            continue
 
 
 def _discard(path):
@@ -49,28 +152,31 @@ def _discard(path):
         pass
 
 
-def _move_into_place(temporary, path, overwrite, what, hint):
-    """The last existence check, then ``os.replace`` of the finished temporary file."""
+def _move_into_place(temporary, path, real, overwrite, what, hint):
+    """Mode and owner kept, the last existence check, then ``os.replace`` of the finished
+    temporary file over ``real`` (the destination, or the target of its link)."""
     if not overwrite and path.exists():
         raise FileExistsError(
             f"{what} '{path}' appeared while it was being written: choose another name, "
             f"or {hint}"
         )
-    os.replace(temporary, path)
+    _keep_mode_and_owner(temporary, real)
+    os.replace(temporary, real)
 
 
 def write_text_atomic(path, text, overwrite=False, what="file", hint="pass overwrite=True"):
     """Write ``text`` (str, UTF-8, ``\\n`` line ends) to ``path`` atomically; returns the Path.
 
     FileExistsError if ``path`` exists and ``overwrite`` is false; FileNotFoundError if its
-    folder does not exist; IsADirectoryError if it is a folder. ``what`` and ``hint`` word the
-    error messages ("preset file", "enable Overwrite").
+    folder does not exist; IsADirectoryError if it is a folder; PermissionError naming
+    ``path`` if its folder cannot be written. ``what`` and ``hint`` word the error messages
+    ("preset file", "enable Overwrite").
     """
-    path = _check_destination(path, overwrite, what, hint)
+    path = Path(path)
+    real = _check_destination(path, overwrite, what, hint)
     data = text.encode("utf-8")  # encoding errors raise before anything touches the disk
-    temporary = temporary_path(path)
-    # O_EXCL: never reuse an existing file; 0o666 lets the umask decide the permissions.
-    fd = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    temporary = temporary_path(real)
+    fd = _create(temporary, what, path)
     try:
         try:
             stream = os.fdopen(fd, "wb")
@@ -81,7 +187,7 @@ def write_text_atomic(path, text, overwrite=False, what="file", hint="pass overw
             stream.write(data)
             stream.flush()
             os.fsync(stream.fileno())
-        _move_into_place(temporary, path, overwrite, what, hint)
+        _move_into_place(temporary, path, real, overwrite, what, hint)
     except BaseException:
         _discard(temporary)
         raise
@@ -93,19 +199,26 @@ def atomic_destination(path, overwrite=False, suffix=".tmp", what="file",
                        hint="pass overwrite=True"):
     """Context manager: yields a temporary Path to write; moves it to ``path`` on success.
 
-    The caller (or a program it runs) writes the temporary file; when the block ends without
-    an exception the file is moved over ``path`` with ``os.replace``. If the block raises, or
-    left no file behind, the temporary file is removed and ``path`` is untouched
+    The folder is probed first (a temporary file created and removed, so an unwritable
+    folder is reported here by ``path``'s name); the caller (or a program it runs) then writes
+    the temporary file (it does not exist yet: writers that keep backups of a file they
+    overwrite, like Blender's Save Versions, make none). When the block ends
+    without an exception the file is moved over ``path`` (or the target of its link) with
+    ``os.replace``, keeping the mode and owner of the file it replaces. If the block raises,
+    or left no file, the temporary file is removed and ``path`` is untouched
     (FileNotFoundError in the second case). ``suffix`` lets writers that choose the format from
     the extension (``.blend``, ``.png``) see the right one.
     """
-    path = _check_destination(path, overwrite, what, hint)
-    temporary = temporary_path(path, suffix)
+    path = Path(path)
+    real = _check_destination(path, overwrite, what, hint)
+    temporary = temporary_path(real, suffix)
+    os.close(_create(temporary, what, path))
+    os.unlink(temporary)
     try:
         yield temporary
         if not temporary.is_file():
             raise FileNotFoundError(f"nothing was written for {what} '{path}'")
-        _move_into_place(temporary, path, overwrite, what, hint)
+        _move_into_place(temporary, path, real, overwrite, what, hint)
     except BaseException:
         _discard(temporary)
         raise

@@ -48,10 +48,19 @@ def describe_nonfinite(pixels, limit=5):
     return len(rows), f"{len(rows)} non-finite (NaN or Inf) texels at {where}{more}"
 
 
+class NonFiniteError(ValueError):
+    """An image with NaN or infinite texels; ``description`` counts and locates them
+    (``describe_nonfinite``), so that each caller can say how to get past it."""
+
+    def __init__(self, description, advice="repair the image first"):
+        super().__init__(f"pixels contain {description}: {advice}")
+        self.description = description
+
+
 def check_finite_pixels(pixels):
     """``pixels`` unchanged, or a ValueError counting and locating its NaN/Inf RGB texels."""
     if not np.isfinite(pixels[..., :3]).all():
-        raise ValueError(f"pixels contain {describe_nonfinite(pixels)[1]}: repair the image first")
+        raise NonFiniteError(describe_nonfinite(pixels)[1])
     return pixels
 
 

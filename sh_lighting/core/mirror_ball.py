@@ -18,7 +18,7 @@ whose centre lies outside the disk carry no light (a mirror-ball photograph's co
 
 import numpy as np
 
-from .equirect import check_pixels, describe_nonfinite
+from .equirect import NonFiniteError, check_pixels, describe_nonfinite
 from .sh import num_coefficients, sh_basis
 
 # Texels within this many texel sizes of the rim are integrated on a sub-grid: there the
@@ -115,9 +115,9 @@ def project_mirror_ball(pixels, max_order=2, nonfinite="raise"):
         if bad.any():
             if nonfinite == "raise":
                 _, message = describe_nonfinite(np.where(used[..., None], a[r0 : r0 + rows], 0))
-                raise ValueError(
-                    f"pixels contain {message} (rows counted from {r0}): repair the image, "
-                    "or pass nonfinite='zero' to treat those texels as black"
+                raise NonFiniteError(
+                    f"{message} (rows counted from {r0})",
+                    "repair the image, or pass nonfinite='zero' to treat those texels as black",
                 )
             rgb = np.where(bad[..., None], 0.0, rgb)
         rgb = np.where(used[..., None], rgb, 0.0)

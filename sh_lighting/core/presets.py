@@ -51,7 +51,9 @@ removed and the destination is untouched. An existing file is only replaced with
 
 import json
 import math
+import os
 import re
+import stat
 from datetime import date, datetime
 from pathlib import Path
 
@@ -60,6 +62,8 @@ from .atomic import write_text_atomic
 from .coefficients import check_coefficients, real_number
 from .sh import COEFFICIENT_NAMES
 
+# A preset is about 1 KB; a file larger than this is not one (and is never read whole).
+MAX_PRESET_BYTES = 1 << 20
 FORMAT_NAME = "sh_lighting.preset"
 FORMAT_VERSION = 1
 FRAME = "blender_world_z_up"
@@ -288,11 +292,20 @@ def preset_from_json(text):
         d = json.loads(
             text, parse_constant=_reject_constant, object_pairs_hook=_no_duplicate_keys
         )
+    except PresetError:
+        raise
     except json.JSONDecodeError as error:
         raise PresetError(
             f"not valid JSON at line {error.lineno}, column {error.colno}: {error.msg}. "
             "Fix the file there (a missing comma or quote, a trailing comma, ...)"
         ) from None
+    except RecursionError:
+        raise PresetError(
+            "its JSON is nested too deeply to read (lists or objects inside each other "
+            "hundreds of times): this is not a preset; a preset nests three levels"
+        ) from None
+    except ValueError as error:  # e.g. an integer of more than 4300 digits
+        raise PresetError(f"its JSON cannot be read ({error}): write plain numbers") from None
     return preset_from_dict(d)
 
 
@@ -327,7 +340,7 @@ def read_preset(path):
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = _read_small_file(path).decode("utf-8")
     except UnicodeDecodeError as error:
         raise PresetError(
             f"preset file '{path}' is not UTF-8 text ({error.reason} at byte {error.start}): "
@@ -337,6 +350,45 @@ def read_preset(path):
         return preset_from_json(text)
     except PresetError as error:
         raise PresetError(f"preset file '{path}': {error}") from None
+
+
+def _read_small_file(path):
+    """The bytes of the regular file ``path`` if it holds at most MAX_PRESET_BYTES.
+
+    A folder, device (``/dev/zero``), FIFO or socket is refused before it is opened (a FIFO
+    would block the open), larger files before they are read: PresetError. A missing file is
+    a FileNotFoundError, an unreadable one an OSError, each naming the file.
+    """
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"preset file '{path}' does not exist: check the path") from None
+    except OSError as error:
+        raise OSError(f"cannot read preset file '{path}': {error.strerror}") from None
+    if stat.S_ISDIR(info.st_mode):
+        raise PresetError(f"'{path}' is a folder: choose a preset file (.json)")
+    if not stat.S_ISREG(info.st_mode):
+        raise PresetError(
+            f"preset file '{path}' is not a regular file (a device, FIFO or socket): choose "
+            "a preset file (.json)"
+        )
+    if info.st_size > MAX_PRESET_BYTES:
+        raise PresetError(
+            f"preset file '{path}' holds {info.st_size} bytes, more than a preset ever does "
+            f"({MAX_PRESET_BYTES} at most): is it really a preset?"
+        )
+    try:  # O_NONBLOCK: should the file have been swapped for a FIFO since, never wait
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as error:
+        raise OSError(f"cannot read preset file '{path}': {error.strerror}") from None
+    with os.fdopen(fd, "rb") as stream:
+        if not stat.S_ISREG(os.fstat(stream.fileno()).st_mode):
+            raise PresetError(f"preset file '{path}' is not a regular file: choose a preset")
+        data = stream.read(MAX_PRESET_BYTES + 1)
+    if len(data) > MAX_PRESET_BYTES:
+        raise PresetError(f"preset file '{path}' grew beyond {MAX_PRESET_BYTES} bytes while "
+                          "it was read: is it really a preset?")
+    return data
 
 
 def write_preset(path, coeffs, metadata=None, overwrite=False):

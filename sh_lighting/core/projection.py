@@ -28,7 +28,7 @@ from math import pi
 
 import numpy as np
 
-from .equirect import check_pixels, column_centres, describe_nonfinite, row_centres
+from .equirect import NonFiniteError, check_pixels, column_centres, describe_nonfinite, row_centres
 from .sh import legendre_q, normalisation, num_coefficients, sh_index
 
 # Rows cast to float64 at a time by each thread: 64 rows of a 4096-wide RGB map are 6 MB.
@@ -192,9 +192,8 @@ def _combine(a, weights, max_order, nonfinite):
     if not np.isfinite(sums).all():
         count, message = describe_nonfinite(a)
         if count and nonfinite == "raise":
-            raise ValueError(
-                f"pixels contain {message}: repair the image, or pass nonfinite='zero' "
-                "to treat those texels as black"
+            raise NonFiniteError(
+                message, "repair the image, or pass nonfinite='zero' to treat those texels as black"
             )
         if count:  # else every texel is finite and the sums overflowed: reported below
             sums = column_sums(a, max_order, zero_nonfinite=True)

@@ -8,127 +8,29 @@ sphere and c around it.
 """
 
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import bpy
 import numpy as np
 import pytest
 from blender_files import write_exr
+from cli_runs import (
+    ALBEDO, EXACT, ROOT, SIZE, SKY, constant_pixels, hidden_files, make_inputs, run, table_row,
+)
 from numpy.testing import assert_allclose
 
 from sh_lighting import cli
 from sh_lighting.blender import materials, scene_data
-from sh_lighting.core.presets import read_preset, write_preset
+from sh_lighting.core.presets import read_preset
 
 pytestmark = pytest.mark.blender
 
-ROOT = Path(__file__).resolve().parents[2]
-SKY = (0.2, 0.5, 1.5)
-ALBEDO = 0.5
-EXACT = np.zeros((9, 3))
-EXACT[0] = 2.0 * math.sqrt(math.pi) * np.array(SKY)
 FLOAT32_TOL = 1e-6  # the EXR holds float32 texels
 RENDER_TOL = 1e-4  # Cycles float32 shading of the group's polynomial
-SIZE = (32, 16)
-
-
-def run(*args, cwd=ROOT, env_extra=None, python_args=("-m", "sh_lighting"), timeout=120):
-    """Run the command line in a fresh process; returns the CompletedProcess."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), **(env_extra or {})}
-    return subprocess.run(
-        [sys.executable, *python_args, *map(str, args)],
-        cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout,
-    )
-
-
-
-
-def constant_pixels(rgb, height=8, width=16):
-    pixels = np.ones((height, width, 4), dtype=np.float32)
-    pixels[..., :3] = rgb
-    return pixels
-
-
-def build_blend(path, hdri):
-    """Sphere with a grey Principled material, an Environment Texture world, camera, EXR out."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    mesh = bpy.data.meshes.new("Ball")
-    import bmesh
-
-    bm = bmesh.new()
-    bmesh.ops.create_uvsphere(bm, u_segments=32, v_segments=16, radius=1.0)
-    bm.to_mesh(mesh)
-    bm.free()
-    for polygon in mesh.polygons:
-        polygon.use_smooth = True
-    ball = bpy.data.objects.new("Ball", mesh)
-    scene.collection.objects.link(ball)
-    material = bpy.data.materials.new("Grey")
-    if material.node_tree is None:
-        material.use_nodes = True
-    bsdf = next(n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
-    bsdf.inputs["Base Color"].default_value = (ALBEDO, ALBEDO, ALBEDO, 1.0)
-    mesh.materials.append(material)
-
-    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    camera.data.type = "ORTHO"
-    camera.data.ortho_scale = 4.0
-    camera.location = (0.0, -5.0, 0.0)
-    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
-    scene.collection.objects.link(camera)
-    scene.camera = camera
-
-    world = bpy.data.worlds.new("Sky")
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(str(hdri))
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    world.cycles.sampling_method = "NONE"  # no importance map: 2.5 s less per frame
-    scene.world = world
-
-    render = scene.render
-    render.engine = "CYCLES"
-    render.resolution_x, render.resolution_y = SIZE
-    render.resolution_percentage = 100
-    render.dither_intensity = 0.0
-    render.image_settings.file_format = "OPEN_EXR"
-    render.image_settings.color_depth = "32"
-    scene.view_settings.view_transform = "Standard"
-    scene.cycles.samples = 4
-    scene.cycles.use_denoising = False
-    scene.cycles.device = "CPU"
-    bpy.ops.wm.save_as_mainfile(filepath=str(path), copy=True)
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    return path
 
 
 @pytest.fixture(scope="module")
 def inputs(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("cli_inputs")
-    hdri = write_exr(folder / "sky.exr", constant_pixels(SKY))
-    blend = build_blend(folder / "scene.blend", hdri)
-    preset = write_preset(folder / "sky.json", EXACT, {"name": "sky"})
-    return {"hdri": hdri, "blend": blend, "preset": preset}
-
-
-def table_row(stdout, name):
-    """The R, G, B numbers printed for coefficient ``name``."""
-    for line in stdout.splitlines():
-        parts = line.split()
-        if parts and parts[0] == name:
-            return [float(v) for v in parts[1:4]]
-    raise AssertionError(f"no {name} row in:\n{stdout}")
-
-
-def hidden_files(folder):
-    return [p.name for p in Path(folder).iterdir() if p.name.startswith(".")]
+    return make_inputs(tmp_path_factory.mktemp("cli_inputs"))
 
 
 # --- help and argument errors (no bpy import: fast) -----------------------------------------

@@ -1,5 +1,8 @@
 """What a careless script hands the API: one clear error each, and the scene unchanged."""
 
+import os
+from pathlib import Path
+
 import bpy
 import numpy as np
 import pytest
@@ -65,3 +68,102 @@ def test_materials_must_be_an_iterable_of_materials(addon, function):
     material = bpy.data.materials.new("One")
     with pytest.raises(TypeError, match=r"materials is one Material \('One'\): pass a list"):
         function(material)
+
+
+@pytest.fixture
+def user_dir(tmp_path, monkeypatch):
+    """Blender's user folder in ``tmp_path`` (checked), so the real one is never touched."""
+    from sh_lighting.blender import preset_io
+
+    resources = tmp_path / "user_resources"
+    monkeypatch.setenv("BLENDER_USER_RESOURCES", str(resources))
+    monkeypatch.delenv("BLENDER_USER_SCRIPTS", raising=False)
+    folder = preset_io.user_preset_dir()
+    assert folder == resources / "scripts" / "presets" / "sh_lighting"
+    return folder
+
+
+@pytest.mark.parametrize(
+    "name, stem",
+    [
+        ("Студия", "Студия"),
+        ("スタジオ", "スタジオ"),
+        ("Ümlaut Warm", "Ümlaut_Warm"),
+        ("U\u0308mlaut", "Ümlaut"),  # decomposed (as macOS types it): one file name, NFC
+        ("../../etc/passwd", "etc_passwd"),  # still no path separators
+        ("a\\b:c", "a_b_c"),
+        ("スタジオ" * 40, "スタジオ" * 16),  # 64 characters, 192 bytes of UTF-8
+    ],
+)
+def test_user_preset_names_keep_their_letters(addon, user_dir, name, stem):
+    from sh_lighting.blender import preset_io
+
+    scene = bpy.context.scene
+    api.set_coefficients(scene, KNOWN)
+    path = api.save_user_preset(scene, name)
+    assert path == user_dir / f"{stem}.json"
+    assert list(preset_io.user_presets()) == [stem]
+    assert [p.name for p in user_dir.iterdir()] == [f"{stem}.json"]
+    assert_array_equal(api.import_preset(scene, path), KNOWN)
+    assert api.remove_user_preset(name) == path and not path.exists()
+
+
+def test_a_name_of_only_punctuation_is_refused(addon, user_dir):
+    with pytest.raises(ValueError, match="has no letters or digits"):
+        api.save_user_preset(bpy.context.scene, " /.:\\ ")
+
+
+def test_capture_folders_a_killed_run_left_are_removed(tmp_path):
+    import subprocess
+    import sys
+
+    from sh_lighting.blender import capture
+
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                              capture_output=True, text=True, check=True)
+    dead = int(finished.stdout)
+    now = 1_000_000_000.0
+    names = {
+        f"sh_lighting_capture_{dead}_abc": True,  # its process is gone: a leftover
+        f"sh_lighting_capture_{os.getpid()}_abc": False,  # ours, in use
+        "sh_lighting_capture_1_abc": False,  # process 1 runs
+        "sh_lighting_capture_old": True,  # an earlier version's, two hours old
+        "sh_lighting_capture_new": False,  # an earlier version's, maybe in use
+        "other_folder": False,
+    }
+    for name, _ in names.items():
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "world.exr").write_bytes(b"x")
+    os.utime(tmp_path / "sh_lighting_capture_old", (now - 7200, now - 7200))
+    os.utime(tmp_path / "sh_lighting_capture_new", (now - 60, now - 60))
+    (tmp_path / f"sh_lighting_capture_{dead}_file").write_text("a file is not ours")
+    removed = capture.remove_stale_captures(tmp_path, now=now)
+    assert sorted(Path(p).name for p in removed) == sorted(n for n, gone in names.items() if gone)
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == sorted([n for n, gone in names.items() if not gone]
+                          + [f"sh_lighting_capture_{dead}_file"])
+
+
+def test_the_next_capture_removes_a_killed_captures_folder(addon):
+    import subprocess
+    import sys
+    import tempfile
+
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                              capture_output=True, text=True, check=True)
+    stale = Path(tempfile.gettempdir()) / f"sh_lighting_capture_{int(finished.stdout)}_killed"
+    stale.mkdir()
+    (stale / "world.exr").write_bytes(b"half")
+    before = {p.name for p in Path(tempfile.gettempdir()).glob("sh_lighting_capture_*")}
+    scene = bpy.context.scene
+    world = bpy.data.worlds.new("Procedural")
+    if world.node_tree is None:
+        world.use_nodes = True
+    background = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    background.inputs["Color"].default_value = (0.25, 0.5, 1.0, 1.0)
+    scene.world = world
+    coeffs = api.compute_from_world(scene, capture_width=16)
+    assert coeffs[0] == pytest.approx(2.0 * np.sqrt(np.pi) * np.array([0.25, 0.5, 1.0]),
+                                      rel=1e-5)
+    after = {p.name for p in Path(tempfile.gettempdir()).glob("sh_lighting_capture_*")}
+    assert not stale.exists() and after == before - {stale.name}

@@ -1,0 +1,334 @@
+"""The user's files under the command line (issue 12): nothing lost, never an output over an
+input, ``//`` paths, permissions and links kept, leftovers of a kill removed, one clear line
+for every bad path. Each command runs in its own process with a temporary HOME and Blender
+user folder (``cli_runs.run``)."""
+
+import os
+import stat
+from pathlib import Path
+
+import bpy
+import numpy as np
+import pytest
+from blender_files import write_exr
+from cli_runs import EXACT, SKY, constant_pixels, make_inputs, run
+from numpy.testing import assert_allclose
+
+from sh_lighting import cli
+from sh_lighting.blender import materials, scene_data
+from sh_lighting.core.presets import read_preset, write_preset
+
+pytestmark = pytest.mark.blender
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    return make_inputs(tmp_path_factory.mktemp("cli_files_inputs"))
+
+
+def one_error_line(result):
+    """The stderr of a failed run: exactly one line, ours, no traceback."""
+    assert result.returncode == 1, (result.stdout, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("sh_lighting: error: "), result.stderr
+    return lines[0]
+
+
+def copy(source, destination):
+    destination.write_bytes(Path(source).read_bytes())
+    return destination
+
+
+def mode(path):
+    return stat.S_IMODE(os.stat(path).st_mode)
+
+
+# --- no output is ever one of the inputs ---------------------------------------------------
+
+
+def test_compute_never_writes_over_its_input(inputs, tmp_path):
+    victim = copy(inputs["hdri"], tmp_path / "victim.exr")
+    (tmp_path / "sub").mkdir()
+    before = victim.read_bytes()
+    for out in (victim, tmp_path / "sub" / ".." / "victim.exr"):
+        for extra in ((), ("--overwrite",)):  # refused first, --overwrite never advised
+            line = one_error_line(run("compute", victim, "--out", out, *extra))
+            assert f"--out '{out}' is the HDRI '{victim}' (the same file)" in line
+            assert "--overwrite" not in line
+    link = tmp_path / "link.exr"
+    link.symlink_to(victim)
+    line = one_error_line(run("compute", link, "--out", victim, "--overwrite"))
+    assert "(the same file): an output never replaces an input" in line
+    hard = tmp_path / "hard.exr"
+    os.link(victim, hard)
+    one_error_line(run("compute", hard, "--out", victim, "--overwrite"))
+    assert victim.read_bytes() == before
+
+    blend = copy(inputs["blend"], tmp_path / "world.blend")
+    before = blend.read_bytes()
+    line = one_error_line(run("compute", blend, "--out", blend, "--overwrite"))
+    assert f"is the .blend file '{blend}'" in line
+    assert blend.read_bytes() == before
+
+
+def test_apply_never_writes_over_its_preset_or_blend(inputs, tmp_path):
+    preset = copy(inputs["preset"], tmp_path / "P.json")
+    blend = copy(inputs["blend"], tmp_path / "B.blend")
+    before = preset.read_bytes(), blend.read_bytes()
+    line = one_error_line(run("apply", preset, blend, "--out", preset, "--overwrite"))
+    assert f"--out '{preset}' is the preset '{preset}'" in line
+    line = one_error_line(run("apply", preset, blend, "--out", blend))
+    assert "is the .blend file" in line and "use --in-place to replace it" in line
+    assert "--overwrite" not in line
+    assert (preset.read_bytes(), blend.read_bytes()) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["B.blend", "P.json"]
+
+
+# --- the user's files: layout, permissions, links --------------------------------------------
+
+
+def test_apply_keeps_the_users_workspaces(inputs, tmp_path):
+    bpy.ops.wm.open_mainfile(filepath=str(inputs["blend"]), load_ui=True)
+    bpy.data.workspaces["Layout"].name = "My Layout"
+    bpy.data.batch_remove([bpy.data.workspaces["Shading"]])
+    blend = tmp_path / "ui.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    out = tmp_path / "ui_sh.blend"
+    result = run("apply", inputs["preset"], blend, "--out", out)
+    assert result.returncode == 0, result.stderr
+    bpy.ops.wm.open_mainfile(filepath=str(out), load_ui=True)
+    names = {w.name for w in bpy.data.workspaces}
+    assert "My Layout" in names and "Layout" not in names and "Shading" not in names
+    assert materials.is_applied(bpy.data.materials["Grey"])
+
+
+def test_in_place_through_a_symlink_keeps_the_link_and_the_mode(inputs, tmp_path):
+    (tmp_path / "store").mkdir()
+    target = copy(inputs["blend"], tmp_path / "store" / "shot.blend")
+    os.chmod(target, 0o600)
+    link = tmp_path / "shot.blend"
+    link.symlink_to(os.path.join("store", "shot.blend"))
+    result = run("apply", inputs["preset"], link, "--in-place")
+    assert result.returncode == 0, result.stderr
+    assert link.is_symlink() and os.readlink(link) == os.path.join("store", "shot.blend")
+    assert mode(target) == 0o600
+    assert sorted(p.name for p in (tmp_path / "store").iterdir()) == ["shot.blend"]
+    bpy.ops.wm.open_mainfile(filepath=str(target))
+    assert_allclose(scene_data.get_coefficients(bpy.context.scene), EXACT, rtol=0, atol=0)
+
+
+@pytest.mark.parametrize("permissions", [0o600, 0o444])
+def test_overwrite_keeps_the_mode(inputs, tmp_path, permissions):
+    out = tmp_path / "p.json"
+    write_preset(out, np.zeros((9, 3)))
+    os.chmod(out, permissions)
+    result = run("compute", inputs["hdri"], "--out", out, "--overwrite")
+    assert result.returncode == 0, result.stderr
+    assert mode(out) == permissions
+    assert_allclose(read_preset(out)[0], EXACT, atol=1e-6)
+
+
+# --- // paths ------------------------------------------------------------------------------
+
+
+def test_blend_relative_paths(inputs, tmp_path):
+    line = one_error_line(run("compute", inputs["hdri"], "--out", "//rel.json"))
+    assert "--out '//rel.json' starts with //" in line and "there is no .blend here" in line
+    assert not Path("/rel.json").exists()
+
+    folder = tmp_path / "shots"
+    folder.mkdir()
+    blend = copy(inputs["blend"], folder / "shot.blend")
+    copy(inputs["hdri"], folder / "sky.exr")  # the world's image, relative to the .blend
+    copy(inputs["preset"], folder / "sky.json")
+    result = run("compute", blend, "--out", "//from_world.json")
+    assert result.returncode == 0, result.stderr
+    assert_allclose(read_preset(folder / "from_world.json")[0], EXACT, atol=1e-6)
+    result = run("apply", "//sky.json", blend, "--out", "//applied.blend")
+    assert result.returncode == 0, result.stderr
+    assert (folder / "applied.blend").is_file()
+
+
+def test_export_preset_resolves_blend_relative_paths(addon, tmp_path):
+    from sh_lighting import api
+
+    scene = bpy.context.scene
+    api.set_coefficients(scene, EXACT)
+    with pytest.raises(ValueError, match=r"'//rel.json' is relative to the .blend file .*never "
+                       "saved"):
+        api.export_preset(scene, "//rel.json")
+    assert not Path("/rel.json").exists()
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "saved.blend"))
+    path = api.export_preset(scene, "//rel.json")
+    assert path == tmp_path / "rel.json"
+    assert_allclose(read_preset(tmp_path / "rel.json")[0], EXACT, rtol=0, atol=0)
+    assert_allclose(api.import_preset(scene, "//rel.json"), EXACT, rtol=0, atol=0)
+
+
+# --- what a kill leaves is removed at the next run -------------------------------------------
+
+
+def test_batch_removes_and_reports_what_a_killed_run_left(tmp_path):
+    hdris, out = tmp_path / "hdris", tmp_path / "presets"
+    hdris.mkdir()
+    out.mkdir()
+    write_exr(hdris / "a.exr", constant_pixels((1.0, 1.0, 1.0)))
+    left = out / ".a.json.0123456789ab.tmp"
+    left.write_text('{"format": "sh_lig')
+    user = out / ".notes.tmp"
+    user.write_text("the user's own")
+    result = run("batch", hdris, out)
+    assert result.returncode == 0, result.stderr
+    assert (f"removed 1 temporary file(s) left in {out} by an interrupted run: "
+            ".a.json.0123456789ab.tmp") in result.stdout
+    assert sorted(p.name for p in out.iterdir()) == [".notes.tmp", "a.json"]
+
+
+def test_apply_removes_what_a_killed_save_left(inputs, tmp_path):
+    out = tmp_path / "new.blend"
+    left = tmp_path / ".new.blend.00ff00ff00ff.blend"
+    left.write_bytes(b"BLENDER half")
+    result = run("apply", inputs["preset"], inputs["blend"], "--out", out)
+    assert result.returncode == 0, result.stderr
+    assert f"removed {left.name}, left in {tmp_path} by an interrupted run" in result.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new.blend"]
+
+
+# --- batch: folders, links, outputs ----------------------------------------------------------
+
+
+def test_batch_counts_and_names_what_is_not_a_file(tmp_path):
+    hdris = tmp_path / "hdris"
+    hdris.mkdir()
+    write_exr(hdris / "a.exr", constant_pixels((1.0, 1.0, 1.0)))
+    (hdris / "folder.exr").mkdir()
+    (hdris / "broken.exr").symlink_to(tmp_path / "gone.exr")
+    result = run("batch", hdris, tmp_path / "out")
+    assert result.returncode == 1
+    assert "3 file(s): 1 ok, 0 skipped, 2 failed" in result.stdout
+    assert "[1/3] a.exr: ok" in result.stdout
+    assert f"broken.exr: a broken symbolic link (its target '{tmp_path / 'gone.exr'}'" in (
+        result.stderr)
+    assert "folder.exr: a folder, not a file" in result.stderr
+    assert "2 file(s) failed: broken.exr, folder.exr" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_batch_never_replaces_an_input_with_its_preset(tmp_path):
+    hdris = tmp_path / "hdris"
+    hdris.mkdir()
+    write_exr(hdris / "a.exr", constant_pixels((1.0, 1.0, 1.0)))
+    (hdris / "a.json").write_text("the user's file")
+    result = run("batch", hdris, hdris, "--pattern", "*", "--force")
+    assert result.returncode == 1
+    assert "a.exr: its preset a.json would replace the input a.json" in result.stderr
+    assert (hdris / "a.json").read_text() == "the user's file"
+
+
+def test_batch_output_folder_that_cannot_be(tmp_path):
+    hdris = tmp_path / "hdris"
+    hdris.mkdir()
+    write_exr(hdris / "a.exr", constant_pixels((1.0, 1.0, 1.0)))
+    a_file = tmp_path / "file"
+    a_file.write_text("x")
+    line = one_error_line(run("batch", hdris, a_file))
+    assert f"OUT_DIR '{a_file}' is a file, not a folder" in line
+    line = one_error_line(run("batch", hdris, a_file / "sub"))
+    assert f"cannot create OUT_DIR '{a_file / 'sub'}'" in line and "a file is in the way" in line
+    line = one_error_line(run("batch", a_file, tmp_path / "o"))
+    assert f"HDRI folder '{a_file}' is a file, not a folder" in line
+
+
+# --- render outputs ----------------------------------------------------------------------------
+
+
+def test_render_outputs_that_cannot_be_written(inputs, tmp_path):
+    line = one_error_line(run("render", inputs["blend"], "--output", ""))
+    assert "--output is empty" in line
+    a_file = tmp_path / "file"
+    a_file.write_text("x")
+    line = one_error_line(run("render", inputs["blend"], "--output", a_file / "f_####"))
+    assert f"cannot create the folder of frame 1, '{a_file}'" in line
+    assert "a file is in the way" in line
+    assert a_file.read_text() == "x"
+
+
+def test_render_frames_are_a_range_not_a_list():
+    """--frames 1 3000000 must not build 3 million paths before frame 1: the frames are a
+    range and each output path is made when its frame is rendered."""
+    args = cli.build_parser().parse_args(
+        ["render", "x.blend", "--output", "o", "--frames", "1", "3000000"]
+    )
+    frames = cli._frames(args, None)
+    assert isinstance(frames, range) and len(frames) == 3_000_000 and frames[-1] == 3_000_000
+
+
+# --- messages --------------------------------------------------------------------------------
+
+
+def test_folders_and_missing_files_are_told_apart(inputs, tmp_path):
+    folder = tmp_path / "looks.exr"
+    folder.mkdir()
+    line = one_error_line(run("compute", folder))
+    assert f"HDRI '{folder}' is a folder, not a file" in line
+    blend_folder = tmp_path / "scene.blend"
+    blend_folder.mkdir()
+    line = one_error_line(run("compute", blend_folder))
+    assert f".blend file '{blend_folder}' is a folder, not a file" in line
+    line = one_error_line(run("apply", inputs["preset"], blend_folder, "--out", tmp_path / "o"))
+    assert "is a folder, not a file" in line
+    line = one_error_line(run("apply", tmp_path / "absent.json", inputs["blend"],
+                              "--out", tmp_path / "o.blend"))
+    assert f"preset file '{tmp_path / 'absent.json'}' does not exist" in line
+    assert "Errno" not in line
+    line = one_error_line(run("batch", tmp_path / "nowhere", tmp_path / "o"))
+    assert "does not exist" in line
+
+
+def test_argument_errors_say_what_is_wrong(inputs):
+    result = run("compute", inputs["hdri"], "--capture-width", "abc")
+    assert result.returncode == 2
+    assert "'abc' is not a positive whole number" in result.stderr
+    assert "_positive" not in result.stderr
+
+
+def test_nonfinite_texels_name_the_cli_option_and_it_works(tmp_path):
+    pixels = constant_pixels(SKY)
+    pixels[2, 3, 1] = np.nan
+    hdri = write_exr(tmp_path / "nan.exr", pixels)
+    line = one_error_line(run("compute", hdri))
+    assert "1 non-finite (NaN or Inf) texels at (row 2, column 3)" in line
+    assert "pass --nonfinite zero to treat those texels as black" in line
+    assert "nonfinite='zero'" not in line
+    result = run("compute", hdri, "--nonfinite", "zero", "--out", tmp_path / "nan.json")
+    assert result.returncode == 0, result.stderr
+    assert read_preset(tmp_path / "nan.json")[0][0, 1] < EXACT[0, 1]  # one texel black
+
+
+def test_library_noise_does_not_reach_stderr(tmp_path):
+    for name, data in (("truncated.exr", b"v/1\x01" + b"\x00" * 200), ("bad.png", b"\x89PNG\r\n"
+                                                                          b"\x1a\n" + b"\x00" * 64)):
+        path = tmp_path / name
+        path.write_bytes(data)
+        line = one_error_line(run("compute", path))
+        assert str(path) in line
+
+
+def test_hostile_presets_are_one_line_each(inputs, tmp_path):
+    valid = Path(inputs["preset"]).read_text()
+    deep = tmp_path / "deep.json"
+    deep.write_text(valid.rstrip()[:-1] + ', "metadata": {"x": ' + "[" * 2000 + "]" * 2000
+                    + "}}")
+    digits = tmp_path / "digits.json"
+    start = valid.index('"L00": [') + len('"L00": [')
+    digits.write_text(valid[:start] + "9" * 5000 + valid[valid.index(",", start):])
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    for preset, expected in ((deep, "nested too deeply"), (digits, "cannot be read"),
+                             ("/dev/zero", "is not a regular file"),
+                             (fifo, "is not a regular file")):
+        line = one_error_line(run("apply", preset, inputs["blend"], "--out", tmp_path / "o.blend",
+                                  timeout=60))
+        assert expected in line and str(preset) in line
+    assert not (tmp_path / "o.blend").exists()

@@ -1,0 +1,194 @@
+"""The user's files: replaced files keep mode, owner and links; leftovers of a kill are found;
+preset reading takes only small regular files and turns every decoding failure into one
+PresetError naming the file (issue 12)."""
+
+import errno
+import os
+import stat
+import threading
+
+import numpy as np
+import pytest
+
+from sh_lighting.core import atomic
+from sh_lighting.core.presets import MAX_PRESET_BYTES, PresetError, read_preset, write_preset
+
+COEFFS = np.arange(27, dtype=np.float64).reshape(9, 3) / 8.0
+OTHER = COEFFS + 1.0
+
+
+def mode(path):
+    return stat.S_IMODE(os.stat(path).st_mode)
+
+
+# --- replacing a file keeps what the user set --------------------------------------------
+
+
+@pytest.mark.parametrize("permissions", [0o600, 0o444, 0o640, 0o755])
+def test_a_replaced_file_keeps_its_permissions(tmp_path, permissions):
+    path = write_preset(tmp_path / "p.json", COEFFS)
+    os.chmod(path, permissions)
+    write_preset(path, OTHER, overwrite=True)
+    assert mode(path) == permissions
+    assert np.array_equal(read_preset(path)[0], OTHER)
+
+
+def test_a_new_file_gets_the_umask_permissions(tmp_path):
+    old = os.umask(0o027)
+    try:
+        path = write_preset(tmp_path / "new.json", COEFFS)
+    finally:
+        os.umask(old)
+    assert mode(path) == 0o640
+
+
+@pytest.mark.skipif(os.getuid() != 0, reason="giving a file to another user needs root")
+def test_a_replaced_file_keeps_its_owner_where_the_system_allows(tmp_path):
+    path = write_preset(tmp_path / "p.json", COEFFS)
+    os.chown(path, 65534, 65534)
+    os.chmod(path, 0o4640)  # chown clears set-id bits: they are set again afterwards
+    write_preset(path, OTHER, overwrite=True)
+    info = os.stat(path)
+    assert (info.st_uid, info.st_gid, stat.S_IMODE(info.st_mode)) == (65534, 65534, 0o4640)
+
+
+def test_atomic_destination_keeps_the_mode_too(tmp_path):
+    path = tmp_path / "render.exr"
+    path.write_bytes(b"old")
+    os.chmod(path, 0o600)
+    with atomic.atomic_destination(path, overwrite=True, suffix=".exr") as temporary:
+        assert not temporary.exists()  # writers that back up an existing file make no backup
+        temporary.write_bytes(b"new")
+    assert path.read_bytes() == b"new" and mode(path) == 0o600
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["render.exr"]
+
+
+def test_a_symbolic_link_is_written_through_to_its_target(tmp_path):
+    (tmp_path / "store").mkdir()
+    target = write_preset(tmp_path / "store" / "real.json", COEFFS)
+    os.chmod(target, 0o600)
+    link = tmp_path / "link.json"
+    link.symlink_to(os.path.join("store", "real.json"))  # relative, as users make them
+    chain = tmp_path / "chain.json"
+    chain.symlink_to(link)
+    write_preset(chain, OTHER, overwrite=True)
+    assert chain.is_symlink() and link.is_symlink()
+    assert os.readlink(link) == os.path.join("store", "real.json")
+    assert np.array_equal(read_preset(target)[0], OTHER) and mode(target) == 0o600
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["chain.json", "link.json", "store"]
+    assert sorted(p.name for p in (tmp_path / "store").iterdir()) == ["real.json"]
+
+
+def test_an_unwritable_folder_is_named_not_our_temporary_file(tmp_path, monkeypatch):
+    """os.open fails as it does in a read-only folder (the tests may run as root, for whom
+    no folder is read-only): the message names the destination and its folder."""
+    real_open = os.open
+
+    def refuse(path, *args, **kwargs):
+        if os.path.basename(path).startswith("."):
+            raise PermissionError(errno.EACCES, "Permission denied", path)
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(atomic.os, "open", refuse)
+    with pytest.raises(PermissionError) as caught:
+        write_preset(tmp_path / "p.json", COEFFS)
+    message = str(caught.value)
+    assert f"cannot write preset file '{tmp_path / 'p.json'}'" in message
+    assert f"folder '{tmp_path}' is not writable" in message
+    assert ".tmp" not in message
+    with pytest.raises(PermissionError, match="is not writable"):
+        with atomic.atomic_destination(tmp_path / "x.blend", suffix=".blend"):
+            pytest.fail("the block must not run when the folder cannot be written")
+
+
+def test_a_file_in_the_way_of_the_folder_is_named(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(NotADirectoryError, match=r"is a file, not a folder"):
+        write_preset(tmp_path / "file" / "p.json", COEFFS)
+
+
+# --- what a kill leaves, found at the next run -------------------------------------------
+
+
+def test_leftovers_of_killed_writes_are_found_by_name_and_removed(tmp_path):
+    keep = ["p.json", ".hidden", ".p.json.tmp", ".p.json.0123456789ax.tmp", "notes.txt"]
+    for name in keep:
+        (tmp_path / name).write_text("user data")
+    ours = [".p.json.0123456789ab.tmp", ".q.json.a1b2c3d4e5f6.tmp", ".s.blend.00ff00ff00ff.blend"]
+    for name in ours:
+        (tmp_path / name).write_text("half written")
+    (tmp_path / ".d.json.abcdefabcdef.tmp").mkdir()  # a folder is never ours to delete
+    assert [p.name for p in atomic.leftovers(tmp_path)] == sorted(ours)
+    assert [p.name for p in atomic.leftovers(tmp_path, "s.blend")] == [ours[2]]
+    assert [p.name for p in atomic.remove_leftovers(tmp_path, "p.json")] == [ours[0]]
+    assert sorted(p.name for p in atomic.remove_leftovers(tmp_path)) == sorted(ours[1:])
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == sorted(keep + [".d.json.abcdefabcdef.tmp"])
+
+
+def test_a_temporary_name_is_what_leftovers_looks_for(tmp_path):
+    temporary = atomic.temporary_path(tmp_path / "frame_0001.exr", ".exr")
+    temporary.write_bytes(b"x")
+    assert atomic.leftovers(tmp_path, "frame_0001.exr") == [temporary]
+
+
+# --- reading presets: small regular files only, one PresetError each ----------------------
+
+
+@pytest.fixture
+def valid(tmp_path):
+    return write_preset(tmp_path / "valid.json", COEFFS).read_text()
+
+
+@pytest.mark.parametrize("depth", [1000, 100_000])
+def test_deep_nesting_is_one_preset_error_naming_the_file(tmp_path, valid, depth):
+    path = tmp_path / "deep.json"
+    path.write_text(valid.rstrip()[:-1] + ', "metadata": {"deep": ' + "[" * depth + "]" * depth
+                    + "}}\n")
+    with pytest.raises(PresetError, match=rf"preset file '{path}': its JSON is nested too deep"):
+        read_preset(path)
+
+
+def test_a_huge_integer_coefficient_is_refused_clearly(tmp_path, valid):
+    path = tmp_path / "big.json"
+    start = valid.index('"L00": [') + len('"L00": [')
+    path.write_text(valid[:start] + "1" * 5000 + valid[valid.index(",", start):])
+    with pytest.raises(PresetError, match=rf"preset file '{path}': its JSON cannot be read"):
+        read_preset(path)
+    path.write_text(valid[:start] + "1" * 400 + valid[valid.index(",", start):])
+    with pytest.raises(PresetError, match=r"coefficient L00 channel R is inf"):
+        read_preset(path)
+
+
+def test_devices_fifos_folders_and_huge_files_are_not_read(tmp_path):
+    with pytest.raises(PresetError, match=r"'/dev/zero' is not a regular file"):
+        read_preset("/dev/zero")
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    outcome = []
+    reader = threading.Thread(target=lambda: outcome.append(_error_of(read_preset, fifo)))
+    reader.start()
+    reader.join(timeout=10)
+    alive = reader.is_alive()
+    if alive:  # unblock the hung open so the test process can end, then fail
+        with open(fifo, "w"):
+            pass
+    assert not alive, "reading a FIFO blocked"
+    assert isinstance(outcome[0], PresetError) and "is not a regular file" in str(outcome[0])
+    with pytest.raises(PresetError, match=r"is a folder: choose a preset file"):
+        read_preset(tmp_path)
+    big = tmp_path / "big.json"
+    with open(big, "wb") as stream:
+        stream.truncate(MAX_PRESET_BYTES + 1)
+    with pytest.raises(PresetError, match=rf"holds {MAX_PRESET_BYTES + 1} bytes, more than"):
+        read_preset(big)
+    with pytest.raises(FileNotFoundError, match=r"preset file '.*absent.json' does not exist"):
+        read_preset(tmp_path / "absent.json")
+
+
+def _error_of(function, *args):
+    try:
+        function(*args)
+    except Exception as error:  # noqa: BLE001 - the test inspects it
+        return error
+    return None
