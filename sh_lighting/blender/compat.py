@@ -89,3 +89,11 @@ def nla_fcurves(datablock):
             else:
                 curves.extend(action.fcurves)
     return tuple(curves)
+
+
+def working_space():
+    """The file's working (scene-linear) colour space: ``bpy.data.colorspace.working_space``
+    in 5.0 ("Linear Rec.709", "Linear Rec.2020" or "ACEScg"); always "Linear Rec.709" before
+    (4.2–4.5 have no such choice)."""
+    colorspace = getattr(bpy.data, "colorspace", None)
+    return colorspace.working_space if colorspace is not None else "Linear Rec.709"

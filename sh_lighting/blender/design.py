@@ -7,8 +7,9 @@ values). Errors are ValueError/LookupError with a message for the user; nothing 
 then. Angles are in radians, like everywhere in Blender's Python API.
 
 The world-reading tools (Match Mapping, the window's error against the world, Split Sun) need
-the world's Environment Texture image: ``world_image`` reads it through ``world``'s own node
-tree interpretation, so they see exactly what Compute from World sees.
+the world's Environment Texture image: they read it with ``world.read_world``, the reader
+Compute from World uses, so they see exactly what it sees (Strength and rotation as
+evaluated at the current frame, pixels decoded as Blender renders them).
 """
 
 from dataclasses import dataclass
@@ -30,7 +31,6 @@ from ..core.world_map import (
     to_world_direction,
 )
 from . import properties, scene_data, world
-from .images import image_pixels
 
 SUN_NAME = "SH Sun"
 SUN_MARKER = "sh_lighting_sun"  # custom property on the Sun object Split Sun made
@@ -103,60 +103,23 @@ def negative_warning(scene):
 # -- the world's image -------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, eq=False)
-class WorldImage:
-    """The Environment Texture image of a world that Compute from World reads directly.
-
-    pixels: (H, W, 3 or 4) scene-linear radiance, rows top to bottom (None if not asked
-    for); projection: "EQUIRECTANGULAR" or "MIRROR_BALL"; strength: the Background's;
-    rotation: the Mapping node's XYZ Euler in radians, or None; image: the image's name.
-    """
-
-    world: str
-    image: str
-    projection: str
-    strength: float
-    rotation: tuple | None
-    pixels: np.ndarray | None
-
-
-def world_image(scene, read_pixels=True):
-    """The scene's world as an image plus Strength and Mapping rotation (``WorldImage``).
-
-    Raises ``world.WorldError`` for a broken world and DesignError when the world is not the
-    Environment Texture → Background chain that Compute from World reads directly (then it
-    is rendered by Cycles, and there is no image to work on).
-    """
-    # world.py's own reading of the node tree (its private helpers: it has no public function
-    # returning the image, Strength and rotation), so this sees what Compute from World sees.
-    output = world._check_world(scene.world, scene.name)
-    name = scene.world.name
-    world._check_images(scene.world, output)
-    try:
-        plan = world._image_plan(output)
-        pixels = None
-        if read_pixels:
-            pixels = world._linear_pixels(plan.image, image_pixels(plan.image))
-    except world._Unsupported as why:
+def _world_image(scene, what, equirect=True):
+    """The scene's world as a ``world.ImageSource`` (``world.read_world``), what Compute from
+    World reads; DesignError when it is not an image (or not an equirect one, if asked),
+    ``world.WorldError`` for a broken world."""
+    source = world.read_world(scene)
+    if isinstance(source, world.ProceduralSource):
         raise DesignError(
-            f"world '{name}' is not an Environment Texture image read directly ({why}): this "
-            "tool needs World Output ← Background ← Environment Texture [← Mapping ← Texture "
-            "Coordinate]"
-        ) from None
-    except ValueError as error:  # image_pixels: no pixel data
-        raise world.WorldError(f"world '{name}': {error}") from None
-    return WorldImage(name, plan.image.name, plan.projection, plan.strength, plan.rotation,
-                      pixels)
-
-
-def _equirect(scene, what):
-    image = world_image(scene)
-    if image.projection != "EQUIRECTANGULAR":
-        raise DesignError(
-            f"{what} needs an equirectangular world image; image '{image.image}' of world "
-            f"'{image.world}' is a {image.projection.replace('_', ' ').lower()}"
+            f"world '{source.world}' is not an Environment Texture image read directly "
+            f"({source.reason}): {what} needs World Output ← Background ← Environment "
+            "Texture [← Mapping ← Texture Coordinate]"
         )
-    return image
+    if equirect and source.projection != "EQUIRECTANGULAR":
+        raise DesignError(
+            f"{what} needs an equirectangular world image; image '{source.image.name}' of "
+            f"world '{source.world}' is a {source.projection.replace('_', ' ').lower()}"
+        )
+    return source
 
 
 def match_mapping(scene):
@@ -167,7 +130,7 @@ def match_mapping(scene):
     has no Mapping rotation that SH Lighting reads.
     """
     coeffs = scene_data.get_coefficients(scene)
-    image = world_image(scene, read_pixels=False)
+    image = _world_image(scene, "Match Mapping", equirect=False)
     if image.rotation is None:
         raise DesignError(
             f"world '{image.world}' has no Mapping node between Texture Coordinate and its "
@@ -242,20 +205,21 @@ def window_for(kind, coeffs, width=DEFAULT_WIDTH):
 def _world_costs(scene, coeffs, kind, window, width):
     """({kind: WindowCost} of every window against the world image, ""), or ({}, why not)."""
     try:
-        image = _equirect(scene, "the error against the world")
+        image = _world_image(scene, "the error against the world")
+        pixels = image.pixels()
     except DesignError:
         return {}, "no error vs the world shown: it is not an equirectangular world image"
     except ValueError as why:  # WorldError: no world, missing image, ...
         return {}, f"no error vs the world shown: {why}"
     # what Compute from World stores for this world (the same operations on the same pixels)
-    reference = map_coefficients(image.pixels, image.strength, image.rotation)
+    reference = map_coefficients(pixels, image.strength, image.rotation)
     if np.abs(coeffs - reference).max() > SAME_AS_WORLD * np.abs(reference).max():
         return {}, (
             "no error vs the world shown: the coefficients are not the world's (edited since "
             "Compute from World)"
         )
     normals = spread_normals(COST_NORMALS)
-    truth = map_irradiance(image.pixels, normals, image.strength, image.rotation)
+    truth = map_irradiance(pixels, normals, image.strength, image.rotation)
     costs = {}
     for other in WINDOWS:
         try:
@@ -338,13 +302,14 @@ def split_sun(scene):
     texels taken out (× the Background's Strength), and stores the coefficients of the
     world without them. Returns a ``SunInfo``.
     """
-    image = _equirect(scene, "Split Sun")
+    image = _world_image(scene, "Split Sun")
     if not image.strength > 0.0:
         return None  # a black (or negative) world has no sun to split off
-    sun = detect_sun(image.pixels)
+    pixels = image.pixels()
+    sun = detect_sun(pixels)
     if sun is None:
         return None
-    rest = map_coefficients(remove_sun(image.pixels, sun), image.strength, image.rotation)
+    rest = map_coefficients(remove_sun(pixels, sun), image.strength, image.rotation)
     direction = to_world_direction(sun.direction, image.rotation)
     strength = sun.strength * image.strength
     scene_data.check_coefficients_9x3(rest)  # fail before anything changes

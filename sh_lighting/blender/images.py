@@ -1,24 +1,40 @@
 """Read Blender images into numpy arrays laid out the way ``sh_lighting.core`` wants them.
 
 The core takes ``(H, W, C)`` float arrays with rows **top to bottom**; Blender's
-``Image.pixels`` run bottom row first, so the arrays returned here are flipped views.
+``Image.pixels`` run bottom row first, so the arrays returned here are flipped.
 
-What ``Image.pixels`` holds (observed on Blender 5.0.1, see tests/blender/test_images.py):
+What ``Image.pixels`` holds (observed on Blender 4.2 and 5.0, see tests/blender/test_images.py):
 
-* float images (OpenEXR, Radiance HDR, generated float images): the stored float values,
-  unchanged; for an EXR these are linear, scene-referred radiance;
+* float images (OpenEXR, Radiance HDR, 16-bit PNG, generated float images): scene-linear
+  values in the file's working space: Blender converts them from the image's colour space
+  when it loads them;
 * 8-bit images such as an sRGB PNG: the stored bytes divided by 255, **not** linearised: a
-  byte of 128 reads as 0.50196, whatever the image's colour space is set to (sRGB or linear).
-  Such values must be converted from the image's colour space before they are used as
-  radiance; nothing here converts them.
+  byte of 128 reads as 0.50196, whatever the image's colour space is set to.
 
-No math here: this module only moves pixels between Blender and numpy.
+``linear_pixels`` is the one decoding every path uses (Compute from World, the design tools,
+the command line's ``compute`` and ``batch`` through ``load_image_pixels``): the radiance
+Blender renders. Float pixels are used as they are; 8-bit texels are decoded from the image's
+colour space (``core.colour.BYTE_SPACES``: sRGB and the linear spaces; "Non-Color" data is
+used as it is) to the file's working space as Cycles does it (``core.colour.byte_tables``):
+mid-grey byte 128 of an sRGB PNG is 0.2159 in a Rec.709 file, pure red is
+(0.613, 0.070, 0.021) in an ACEScg one (tests against Cycles captures in
+tests/blender/test_colour_spaces.py). Images Blender renders otherwise than modelled here
+raise ``DecodeError`` saying why: 8-bit images in other colour spaces, and 8-bit texels with
+alpha < 1 in Straight or Premultiplied mode (Cycles shows their colour premultiplied, rounded
+in the encoded bytes); the world reader then lets Cycles capture the world instead.
 """
 
 import os
 
 import bpy
 import numpy as np
+
+from ..core.colour import BYTE_SPACES, byte_tables, decode_bytes
+from .compat import working_space
+
+
+class DecodeError(ValueError):
+    """Blender renders the image's texels otherwise than ``linear_pixels`` can reproduce."""
 
 
 def has_pixel_data(image):
@@ -94,10 +110,57 @@ def image_pixels(image):
     return rgba
 
 
-def load_image_pixels(path):
-    """Read the image file at ``path`` like :func:`image_pixels`, leaving nothing in bpy.data.
+def undecodable_reason(image):
+    """Why ``linear_pixels`` cannot decode ``image`` whatever its texels, or "" if it can.
 
-    Raises ValueError naming the path when the file is missing or is not a readable image.
+    Looks at the image's settings only (no pixels are read).
+    """
+    if image.is_float:
+        return ""
+    settings = image.colorspace_settings
+    if settings.is_data or settings.name in BYTE_SPACES:
+        return ""
+    return f"8-bit image '{image.name}' is in colour space {settings.name}"
+
+
+def linear_pixels(image):
+    """The radiance Blender renders from ``image``: float32 (H, W, 4), rows top to bottom.
+
+    RGB is scene linear in the file's working space (see the module docstring); alpha is
+    the image's. Raises DecodeError (a ValueError) when Blender renders the texels otherwise
+    (``undecodable_reason``, or 8-bit texels with alpha < 1 in Straight or Premultiplied
+    alpha mode), and ValueError when the image has no pixel data (``image_pixels``).
+    """
+    pixels = image_pixels(image)
+    reason = undecodable_reason(image)
+    if reason:
+        raise DecodeError(reason)
+    # Float images and alpha modes that ignore alpha show the stored colour (measured against
+    # Cycles on 4.2 and 5.0); 8-bit texels with alpha < 1 are shown premultiplied.
+    if (
+        not image.is_float and image.alpha_mode in ("STRAIGHT", "PREMUL")
+        and (pixels[..., 3] < 1.0).any()
+    ):
+        raise DecodeError(
+            f"8-bit image '{image.name}' has transparent texels, which Blender shows "
+            "premultiplied by their alpha"
+        )
+    settings = image.colorspace_settings
+    if image.is_float or settings.is_data:
+        return np.ascontiguousarray(pixels)
+    codes = np.rint(pixels[..., :3] * 255.0).astype(np.uint8)
+    decoded = np.empty(pixels.shape, dtype=np.float32)
+    decoded[..., :3] = decode_bytes(codes, byte_tables(settings.name, working_space()))
+    decoded[..., 3] = pixels[..., 3]
+    return decoded
+
+
+def load_image_pixels(path):
+    """The radiance Blender renders from the image file at ``path`` (:func:`linear_pixels`),
+    leaving nothing in bpy.data.
+
+    Raises ValueError naming the path when the file is missing or is not a readable image,
+    DecodeError when Blender renders it otherwise than it can be decoded here.
     """
     path = os.fspath(path)
     if not os.path.isfile(path):
@@ -107,6 +170,6 @@ def load_image_pixels(path):
     except RuntimeError as error:
         raise ValueError(f"Blender could not open image file '{path}': {error}") from None
     try:
-        return image_pixels(image)
+        return linear_pixels(image)
     finally:
         bpy.data.images.remove(image)

@@ -140,16 +140,17 @@ def scene_metadata(scene):
         return metadata
     if not np.array_equal(computed, scene_data.get_coefficients(scene)):
         return metadata  # edited or loaded since: the world is not their source
-    try:  # read the world's node tree only (no pixels); any surprise means "unknown"
-        output = world_module._check_world(scene.world, scene.name)
-        plan = world_module._image_plan(output)
-    except Exception:  # noqa: BLE001 - metadata is optional
+    try:  # the world reader (no pixels); a broken world only means "unknown"
+        source = world_module.read_world(scene)
+    except world_module.WorldError:
         return metadata
-    image = plan.image
+    if not isinstance(source, world_module.ImageSource):
+        return metadata
+    image = source.image
     path = bpy.path.abspath(image.filepath, library=image.library) if image.filepath else ""
     metadata["source"] = os.path.normpath(path) if path else f"image '{image.name}'"
-    metadata["mapping"] = list(plan.rotation) if plan.rotation is not None else [0.0, 0.0, 0.0]
-    metadata["strength"] = plan.strength
+    metadata["mapping"] = list(source.rotation) if source.rotation is not None else [0.0, 0.0, 0.0]
+    metadata["strength"] = source.strength
     return metadata
 
 

@@ -1,41 +1,48 @@
-"""The 9 lighting coefficients L_lm of a scene's world, as Blender renders it.
+"""What a scene's world is, and its 9 lighting coefficients L_lm, as Blender renders it.
 
-Two ways, chosen by reading the world's node tree (nothing is ever written to it):
+``read_world(scene)`` is the world reader every part of the add-on uses (Compute from World,
+the design tools, preset metadata, light extraction). It reads the world's node tree, as
+evaluated by the depsgraph at the scene's current frame (keyframes and drivers of the
+Background's Strength and the Mapping rotation included), writes nothing, and returns one of:
 
-* **image** (fast, exact for the image): World Output ← Background ← Environment Texture
+* ``ImageSource``: the world is World Output ← Background ← Environment Texture
   (Equirectangular or Mirror Ball), optionally ← Mapping (Point, rotation only) ← Texture
-  Coordinate (Generated). The image's pixels are read once and projected by the core; the
-  Background's Strength scales L, and a Mapping rotation R gives the lighting of the image
-  rotated by R⁻¹ (REFERENCE.md §3; checked against Cycles renders in tests/blender/test_world.py).
-  ``Image.pixels`` of a float image (EXR, HDR, 16-bit PNG) are already scene-linear whatever
-  the image's colour space; 8-bit images give byte / 255 in their own colour space, so "sRGB"
-  ones are decoded with the exact sRGB curve (what Cycles does) and "Non-Color" / "Linear
-  Rec.709" ones are used as they are;
-* **capture** (anything else: Sky Texture, gradients, mixes, other colour spaces, transparent
-  texels, unsupported Mapping settings, ...): the world is rendered by Cycles into an
-  equirectangular panorama (``capture.capture_world``) which is projected the same way.
+  Coordinate (Generated), with an image ``images.linear_pixels`` decodes exactly. It holds
+  the image, its projection, the Mapping rotation, the Background Strength, the image's
+  colour space and the file's working space; ``pixels()`` reads the radiance on demand. The
+  Strength scales L, and a Mapping rotation R gives the lighting of the image rotated by R⁻¹
+  (REFERENCE.md §3; checked against Cycles renders in tests/blender/test_world.py);
+* ``ProceduralSource``: anything else (Sky Texture, gradients, mixes, other colour spaces,
+  unsupported Mapping settings, ...), with the reason; ``world_coefficients`` renders it by
+  Cycles into an equirectangular panorama (``capture.capture_world``).
 
 Errors that no rendering can fix (no world, no output, a texture without its image, an image
 whose file is missing) raise ``WorldError`` with what to do; nothing in ``bpy.data`` changes.
 
-``world_cache.cached_world_coefficients`` wraps ``world_coefficients`` to reuse its last result
-while the world is unchanged.
+Coefficients are in the file's working colour space (``working_space``: "Linear Rec.709"
+before Blender 5.0), like everything Blender renders; exports convert them
+(``core.colour.convert_coefficients``).
 """
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
-from ..core.colour import srgb_to_linear
+import bpy
+
 from ..core.mirror_ball import project_mirror_ball
 from ..core.projection import project_equirect
 from ..core.world_map import apply_mapping
 from . import compat
 from .capture import CaptureError, capture_world
-from .images import has_pixel_data, image_pixels, missing_data_message
+from .images import (
+    DecodeError,
+    has_pixel_data,
+    linear_pixels,
+    missing_data_message,
+    undecodable_reason,
+)
 
 PROJECTIONS = ("EQUIRECTANGULAR", "MIRROR_BALL")
-# 8-bit colour spaces whose byte / 255 values are already the linear radiance Cycles renders.
-LINEAR_BYTE_SPACES = ("Linear Rec.709",)
 # Image sources the fast path reads (sequences and movies depend on the frame).
 STILL_SOURCES = ("FILE", "GENERATED")
 
@@ -52,12 +59,14 @@ class WorldInfo:
     "capture" (the world was rendered by Cycles; ``reason`` says why). For "image":
     ``image`` and ``projection`` name the image and its mapping, ``rotation`` is the Mapping
     node's XYZ Euler rotation in radians (None without a Mapping node) and ``strength`` the
-    Background's. ``elapsed`` is the wall time in seconds.
+    Background's (both as evaluated at the scene's frame). ``working_space``: the colour
+    space of the coefficients. ``elapsed`` is the wall time in seconds.
     """
 
     source: str
     world: str
     elapsed: float
+    working_space: str = "Linear Rec.709"
     image: str | None = None
     projection: str | None = None
     rotation: tuple[float, float, float] | None = None
@@ -67,12 +76,49 @@ class WorldInfo:
     cached: bool = False  # reused by ``world_cache``; ``elapsed`` is then the look-up's time
 
 
-@dataclass(frozen=True)
-class _ImagePlan:
+@dataclass(frozen=True, eq=False)
+class ImageSource:
+    """A world that is an Environment Texture image read directly (``read_world``).
+
+    world: the world's name; image: the ``bpy.types.Image`` (the original datablock);
+    projection: "EQUIRECTANGULAR" or "MIRROR_BALL"; rotation: the Mapping node's XYZ Euler
+    rotation in radians, or None without a Mapping node; strength: the Background's
+    Strength (both as evaluated at ``frame``); colour_space: the image's colour space;
+    working_space: the file's, that of ``pixels()`` and of the coefficients.
+    """
+
+    world: str
     image: object
     projection: str
-    rotation: tuple[float, float, float] | None
+    rotation: tuple | None
     strength: float
+    colour_space: str
+    working_space: str
+    frame: int
+    _pixels: object = field(default=None, repr=False)
+
+    def pixels(self):
+        """The image's radiance as Blender renders it (``images.linear_pixels``): a fresh
+        float32 (H, W, 4) array, rows top to bottom, scene linear in ``working_space``;
+        Strength and rotation are *not* applied. WorldError when the image has no pixel data.
+        """
+        if self._pixels is not None:
+            return self._pixels.copy()
+        try:
+            return linear_pixels(self.image)
+        except ValueError as error:  # no pixel data (read_world checked the decoding)
+            raise WorldError(f"world '{self.world}': {error}") from None
+
+
+@dataclass(frozen=True)
+class ProceduralSource:
+    """A world ``read_world`` cannot read as an image: Cycles must render (capture) it.
+
+    world: the world's name; reason: why (e.g. "the world's surface is a Mix Shader node").
+    """
+
+    world: str
+    reason: str
 
 
 class _Unsupported(Exception):
@@ -135,7 +181,7 @@ def _check_images(world, output):
         if node.type not in ("TEX_ENVIRONMENT", "TEX_IMAGE"):
             continue
         kind = "Environment Texture" if node.type == "TEX_ENVIRONMENT" else "Image Texture"
-        image = node.image
+        image = _original(node.image)
         if image is None:
             if node.type == "TEX_ENVIRONMENT":
                 raise WorldError(
@@ -212,8 +258,9 @@ def _vector_rotation(texture):
     return tuple(float(a) for a in inputs["Rotation"].default_value)
 
 
-def _image_plan(output):
-    """The fast-path plan for the world, or _Unsupported saying why it needs a capture."""
+def _image_source(world, output, scene):
+    """The ``ImageSource`` of the evaluated ``world``, or _Unsupported saying why it needs a
+    capture."""
     if output.inputs["Volume"].is_linked:
         raise _Unsupported("the world has a volume shader")
     source = _source_socket(output.inputs["Surface"])
@@ -231,77 +278,111 @@ def _image_plan(output):
         raise _Unsupported(f"the Background's Color comes from {texture.bl_label} {colour.name}")
     if texture.projection not in PROJECTIONS:
         raise _Unsupported(f"the Environment Texture's projection is {texture.projection}")
-    image = texture.image
+    image = _original(texture.image)
     if image.source not in STILL_SOURCES:
         raise _Unsupported(f"image '{image.name}' is a {image.source.lower()}")
-    return _ImagePlan(
+    reason = undecodable_reason(image)
+    if reason:
+        raise _Unsupported(reason)
+    pixels = None
+    if not image.is_float and image.depth == 32 and image.alpha_mode in ("STRAIGHT", "PREMUL"):
+        try:  # 8-bit with an alpha channel: only its texels tell whether it is exact
+            pixels = linear_pixels(image)
+        except DecodeError as why:
+            raise _Unsupported(str(why)) from None
+    return ImageSource(
+        world=world.name,
         image=image,
         projection=texture.projection,
         rotation=_vector_rotation(texture),
         strength=float(strength.default_value),
+        colour_space=image.colorspace_settings.name,
+        working_space=compat.working_space(),
+        frame=scene.frame_current,
+        _pixels=pixels,
     )
 
 
-# -- the two paths -----------------------------------------------------------------------------
+# -- the reader --------------------------------------------------------------------------------
 
 
-def _linear_pixels(image, pixels):
-    """Scene-linear RGB(A) of ``pixels`` read from ``image``, or _Unsupported."""
-    # Transparent texels: Cycles divides or multiplies by alpha depending on the image's alpha
-    # mode and depth; only the cases where it shows the stored colour are read directly.
-    alpha_shown_as_is = image.alpha_mode in ("CHANNEL_PACKED", "NONE") or (
-        image.is_float and image.alpha_mode == "PREMUL"
-    )
-    if not alpha_shown_as_is and (pixels[..., 3] < 1.0).any():
-        raise _Unsupported(f"image '{image.name}' has transparent texels")
-    if image.is_float:
-        return pixels
-    settings = image.colorspace_settings
-    if settings.name == "sRGB":
-        return srgb_to_linear(pixels[..., :3])
-    if settings.is_data or settings.name in LINEAR_BYTE_SPACES:
-        return pixels
-    raise _Unsupported(f"8-bit image '{image.name}' is in colour space {settings.name}")
+def _original(datablock):
+    return getattr(datablock, "original", None) or datablock
 
 
-def _project_image(plan, world):
-    # ``_check_images`` has made sure a file image has pixels; a generated one always has.
-    pixels = image_pixels(plan.image)
-    linear = _linear_pixels(plan.image, pixels)
-    project = project_equirect if plan.projection == "EQUIRECTANGULAR" else project_mirror_ball
-    try:
-        coeffs = project(linear)
-    except ValueError as error:
-        raise WorldError(f"image '{plan.image.name}' of world '{world.name}': {error}") from None
-    # The Mapping node turns the lookup direction by R: the lighting is the image turned by Rᵀ.
-    return apply_mapping(coeffs, plan.strength, plan.rotation)
+def _evaluated_world(scene, depsgraph):
+    """``scene.world`` as the depsgraph evaluates it at the scene's current frame."""
+    if depsgraph is None:
+        context = bpy.context
+        if context.scene == scene and context.view_layer is not None:
+            depsgraph = context.evaluated_depsgraph_get()
+        else:
+            with context.temp_override(scene=scene, view_layer=scene.view_layers[0]):
+                depsgraph = context.evaluated_depsgraph_get()
+    return scene.world.evaluated_get(depsgraph)
 
 
-def world_coefficients(scene, capture_width=256):
-    """(9, 3) float64 L_lm of ``scene``'s world as Cycles renders it, and a ``WorldInfo``.
+def read_world(scene, depsgraph=None):
+    """What ``scene``'s world is: an ``ImageSource`` or a ``ProceduralSource``.
 
-    ``capture_width``: width of the Cycles panorama when the world has to be rendered.
-    Raises WorldError (a ValueError) when the world cannot give any lighting.
+    The node tree is read as ``depsgraph`` (default: the scene's evaluated depsgraph)
+    evaluates it, so keyed and driven Strength and Mapping rotation are those of the scene's
+    current frame, as the next render shows them. No pixels are read, except the alpha of an
+    8-bit image with an alpha channel (transparent texels need a capture). Raises WorldError
+    (a ValueError) for a world that cannot give any lighting: no world, no node tree, no
+    active World Output or nothing connected to it, an image texture without its image or
+    an image without pixel data. Changes nothing.
     """
-    start = time.perf_counter()
     world = scene.world if scene is not None else None
-    output = _check_world(world, scene.name if scene is not None else "(none)")
+    _check_world(world, scene.name if scene is not None else "(none)")
+    evaluated = _evaluated_world(scene, depsgraph)
+    output = _check_world(evaluated, scene.name)
     _check_images(world, output)
     try:
-        plan = _image_plan(output)
-        coeffs = _project_image(plan, world)
+        return _image_source(world, output, scene)
+    except _Unsupported as why:
+        return ProceduralSource(world=world.name, reason=str(why))
+
+
+# -- the coefficients --------------------------------------------------------------------------
+
+
+def _project_image(source):
+    pixels = source.pixels()
+    project = project_equirect if source.projection == "EQUIRECTANGULAR" else project_mirror_ball
+    try:
+        coeffs = project(pixels)
+    except ValueError as error:
+        raise WorldError(
+            f"image '{source.image.name}' of world '{source.world}': {error}"
+        ) from None
+    # The Mapping node turns the lookup direction by R: the lighting is the image turned by Rᵀ.
+    return apply_mapping(coeffs, source.strength, source.rotation)
+
+
+def world_coefficients(scene, capture_width=256, depsgraph=None):
+    """(9, 3) float64 L_lm of ``scene``'s world as Cycles renders it, and a ``WorldInfo``.
+
+    ``read_world`` decides: an image is projected (``core``), anything else is captured by
+    Cycles at ``capture_width`` × ``capture_width``/2 at the scene's current frame. Raises
+    WorldError (a ValueError) when the world cannot give any lighting.
+    """
+    start = time.perf_counter()
+    source = read_world(scene, depsgraph)
+    world = scene.world
+    if isinstance(source, ImageSource):
+        coeffs = _project_image(source)
         info = WorldInfo(
             source="image",
             world=world.name,
             elapsed=time.perf_counter() - start,
-            image=plan.image.name,
-            projection=plan.projection,
-            rotation=plan.rotation,
-            strength=plan.strength,
+            working_space=source.working_space,
+            image=source.image.name,
+            projection=source.projection,
+            rotation=source.rotation,
+            strength=source.strength,
         )
         return coeffs, info
-    except _Unsupported as why:
-        reason = str(why)
     try:
         pixels = capture_world(world, capture_width, frame=scene.frame_current)
     except CaptureError as error:
@@ -317,8 +398,8 @@ def world_coefficients(scene, capture_width=256):
         source="capture",
         world=world.name,
         elapsed=time.perf_counter() - start,
-        reason=reason,
+        working_space=compat.working_space(),
+        reason=source.reason,
         capture_width=int(capture_width),
     )
     return coeffs, info
-

@@ -1,12 +1,143 @@
-"""Colour-space decoding the Blender layer needs before projecting 8-bit images.
+"""Colour: decoding 8-bit texels, the RGB working spaces Blender 4.2–5.0 render in, luminance.
 
-An 8-bit image in the "sRGB" colour space stores the sRGB-encoded value; ``Image.pixels`` gives
-it as byte / 255, and Cycles renders it decoded with the exact piecewise sRGB transfer function
-(IEC 61966-2-1), which is what ``srgb_to_linear`` computes (checked against Cycles renders in
-tests/blender/test_world.py).
+**Working spaces.** Coefficients are in the scene's working (scene-linear) RGB space: always
+"Linear Rec.709" before Blender 5.0; 5.0 lets a file choose "Linear Rec.709", "Linear Rec.2020"
+or "ACEScg" (``bpy.data.colorspace.working_space``). ``WORKING_SPACES`` gives each one's CIE
+xy primaries and white point (ITU-R BT.709-6, ITU-R BT.2020-2, SMPTE ST 2065-1 / Academy
+S-2014-004 for AP1 with the ACES white). From them:
+
+* ``rgb_to_xyz_matrix(space)``: the normalised primary matrix (SMPTE RP 177): the columns are
+  the primaries' XYZ scaled so that RGB (1, 1, 1) is the white point with Y = 1;
+* ``luminance_weights(space)``: the Y row of that matrix adapted to D65 (what a luminance of
+  the working space's RGB means; Rec.709 gives 0.2126, 0.7152, 0.0722). This is the project's
+  one definition of luminance (saturation edits, term descriptions, sun detection);
+* ``conversion_matrix(source, target)``: RGB of ``source`` to RGB of ``target`` through XYZ,
+  with a Bradford chromatic adaptation between white points (ACEScg's white is ~D60), which is
+  what Blender's OpenColorIO configuration does (checked against ``mathutils.Color`` in
+  tests/blender/test_colour_spaces.py to 1e-4);
+* ``convert_coefficients(coeffs, source, target)``: L_lm (or any (..., 3) RGB) converted;
+  projection is linear in the radiance, so converting L_lm equals converting the image.
+
+**8-bit texels.** An 8-bit image in colour space ``BYTE_SPACES`` is decoded as Blender renders
+it: byte / 255, its transfer curve (the exact IEC 61966-2-1 sRGB curve, ``srgb_to_linear``,
+which Cycles applies in float32 to sRGB textures of a Rec.709 file), then the matrix from the
+image's primaries to the working space (what OpenColorIO applies on load otherwise). As both
+steps act per channel and then mix linearly, ``byte_tables`` tabulates each byte of each
+channel once and ``decode_bytes`` sums three table look-ups per texel. Checked against Cycles
+captures for every space in both a Rec.709 and an ACEScg file (tests/blender/test_colour_spaces.py).
 """
 
 import numpy as np
+
+#: name -> (red xy, green xy, blue xy, white xy)
+WORKING_SPACES = {
+    "Linear Rec.709": ((0.64, 0.33), (0.30, 0.60), (0.15, 0.06), (0.3127, 0.3290)),
+    "Linear Rec.2020": ((0.708, 0.292), (0.170, 0.797), (0.131, 0.046), (0.3127, 0.3290)),
+    "ACEScg": ((0.713, 0.293), (0.165, 0.830), (0.128, 0.044), (0.32168, 0.33767)),
+}
+REC709 = "Linear Rec.709"
+#: 8-bit image colour spaces decoded directly: name -> (transfer curve, primaries' space).
+BYTE_SPACES = {
+    "sRGB": ("srgb", REC709),
+    "Linear Rec.709": (None, REC709),
+    "Linear Rec.2020": (None, "Linear Rec.2020"),
+    "ACEScg": (None, "ACEScg"),
+}
+D65 = (0.3127, 0.3290)
+# Bradford cone response matrix (Lam 1985), the chromatic adaptation OpenColorIO configs use.
+BRADFORD = np.array([
+    [0.8951, 0.2664, -0.1614],
+    [-0.7502, 1.7135, 0.0367],
+    [0.0389, -0.0685, 1.0296],
+])
+
+
+def _space(name):
+    try:
+        return WORKING_SPACES[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown working colour space {name!r}: use one of {', '.join(WORKING_SPACES)}"
+        ) from None
+
+
+def _xyz(xy):
+    """XYZ with Y = 1 of chromaticity (x, y)."""
+    x, y = xy
+    return np.array([x / y, 1.0, (1.0 - x - y) / y])
+
+
+def _adaptation(white_from, white_to):
+    """Bradford matrix taking XYZ under ``white_from`` to XYZ under ``white_to``."""
+    source, target = BRADFORD @ _xyz(white_from), BRADFORD @ _xyz(white_to)
+    return np.linalg.solve(BRADFORD, np.diag(target / source) @ BRADFORD)
+
+
+def rgb_to_xyz_matrix(space, white=D65):
+    """3×3 matrix from ``space``'s RGB to CIE XYZ, adapted (Bradford) to ``white`` (xy).
+
+    SMPTE RP 177: P = [X_r X_g X_b] of the primaries (Y = 1), S = P⁻¹ W, matrix = P diag(S),
+    so RGB (1, 1, 1) maps to the space's white with Y = 1, then adapted to ``white``.
+    """
+    red, green, blue, own_white = _space(space)
+    primaries = np.stack([_xyz(red), _xyz(green), _xyz(blue)], axis=1)
+    scale = np.linalg.solve(primaries, _xyz(own_white))
+    return _adaptation(own_white, white) @ primaries @ np.diag(scale)
+
+
+def luminance_weights(space=REC709):
+    """(3,) weights giving the luminance Y (D65-adapted) of RGB in ``space``; they sum to 1."""
+    return rgb_to_xyz_matrix(space)[1]
+
+
+def conversion_matrix(source, target):
+    """3×3 matrix taking linear RGB in ``source`` to linear RGB in ``target`` (both names of
+    ``WORKING_SPACES``), through D65-adapted XYZ."""
+    if source == target:
+        _space(source)
+        return np.eye(3)
+    return np.linalg.solve(rgb_to_xyz_matrix(target), rgb_to_xyz_matrix(source))
+
+
+def convert_coefficients(coeffs, source, target=REC709):
+    """``coeffs`` (..., 3) RGB (e.g. (9, 3) L_lm) from working space ``source`` to ``target``,
+    float64; a copy even when the spaces are the same."""
+    c = np.array(coeffs, dtype=np.float64)
+    if c.shape[-1:] != (3,):
+        raise ValueError(f"colour conversion needs RGB values (..., 3), got shape {c.shape}")
+    return c @ conversion_matrix(source, target).T
+
+
+def byte_tables(space, working):
+    """(3, 256, 3) float32 tables of ``decode_bytes``: ``[k, b]`` is byte b in channel k of
+    an image in ``space`` (a ``BYTE_SPACES`` name) as linear RGB of ``working``."""
+    try:
+        curve, primaries = BYTE_SPACES[space]
+    except KeyError:
+        raise ValueError(
+            f"8-bit colour space {space!r} is not decoded here: use one of {', '.join(BYTE_SPACES)}"
+        ) from None
+    values = np.arange(256) / 255.0
+    if curve == "srgb":
+        values = srgb_to_linear(values)
+    matrix = conversion_matrix(primaries, working)
+    return (values[None, :, None] * matrix.T[:, None, :]).astype(np.float32)
+
+
+def decode_bytes(codes, tables):
+    """Linear RGB (H, W, 3) float32 of 8-bit texels ``codes`` (H, W, 3) uint8.
+
+    ``tables`` (3, 256, 3): ``tables[k, b]`` is the decoded RGB of byte b in channel k with the
+    other channels 0; the result is Σ_k tables[k, codes[..., k]] (exact for colour spaces that
+    decode each channel by a curve and then mix the channels linearly).
+    """
+    t = np.asarray(tables, dtype=np.float32)
+    if t.shape != (3, 256, 3):
+        raise ValueError(f"byte decoding tables must have shape (3, 256, 3), got {t.shape}")
+    out = t[0][codes[..., 0]]
+    out += t[1][codes[..., 1]]
+    out += t[2][codes[..., 2]]
+    return out
 
 
 def srgb_to_linear(values):

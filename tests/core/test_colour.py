@@ -1,7 +1,9 @@
-"""The sRGB decoding used for 8-bit sRGB world images."""
+"""core.colour: the sRGB curve, the working spaces' matrices and luminance, byte decoding."""
 
 import numpy as np
+import pytest
 
+from sh_lighting.core import colour
 from sh_lighting.core.colour import srgb_to_linear
 
 
@@ -30,3 +32,56 @@ def test_continuous_at_the_knee_and_odd():
     v = np.linspace(-2.0, 2.0, 41)
     assert np.array_equal(srgb_to_linear(-v), -srgb_to_linear(v))
     assert srgb_to_linear(np.ones((2, 3, 3), dtype=np.float32)).dtype == np.float64
+
+
+# -- working spaces: published matrices (independent of the primaries-based derivation) -----
+
+# ITU-R BT.2087-0 (Rec.709 -> Rec.2020, 4 decimals) and the ACES documentation's linear
+# Rec.709 -> ACEScg matrix with Bradford adaptation (4 decimals).
+BT2087 = [[0.6274, 0.3293, 0.0433], [0.0691, 0.9195, 0.0114], [0.0164, 0.0880, 0.8956]]
+REC709_TO_ACESCG = [[0.6131, 0.3395, 0.0474], [0.0702, 0.9164, 0.0134],
+                    [0.0206, 0.1096, 0.8698]]
+
+
+def test_conversion_matrices_match_published_ones():
+    m = colour.conversion_matrix("Linear Rec.709", "Linear Rec.2020")
+    assert np.abs(m - BT2087).max() < 1e-4
+    m = colour.conversion_matrix("Linear Rec.709", "ACEScg")
+    assert np.abs(m - REC709_TO_ACESCG).max() < 1e-4
+
+
+def test_luminance_weights():
+    assert np.abs(colour.luminance_weights() - [0.2126, 0.7152, 0.0722]).max() < 5e-5
+    for space in colour.WORKING_SPACES:
+        assert abs(colour.luminance_weights(space).sum() - 1.0) < 1e-12
+
+
+def test_conversions_keep_white_and_invert():
+    rng = np.random.default_rng(0)
+    coeffs = rng.normal(size=(9, 3))
+    for space in colour.WORKING_SPACES:
+        there = colour.convert_coefficients(coeffs, "Linear Rec.709", space)
+        back = colour.convert_coefficients(there, space, "Linear Rec.709")
+        assert np.abs(back - coeffs).max() < 1e-12
+        white = colour.convert_coefficients(np.ones(3), "Linear Rec.709", space)
+        assert np.abs(white - 1.0).max() < 1e-12
+    same = colour.convert_coefficients(coeffs, "ACEScg", "ACEScg")
+    assert np.array_equal(same, coeffs) and same is not coeffs
+    with pytest.raises(ValueError, match="unknown working colour space"):
+        colour.convert_coefficients(coeffs, "Rec.709", "ACEScg")
+    with pytest.raises(ValueError, match=r"\(\.\.\., 3\)"):
+        colour.convert_coefficients(np.ones((9, 4)), "ACEScg", "Linear Rec.709")
+
+
+def test_byte_tables_decode_each_channel_then_mix():
+    codes = np.random.default_rng(1).integers(0, 256, (4, 5, 3)).astype(np.uint8)
+    decoded = colour.decode_bytes(codes, colour.byte_tables("sRGB", "Linear Rec.709"))
+    assert decoded.dtype == np.float32
+    assert np.abs(decoded - srgb_to_linear(codes / 255.0)).max() < 1e-7
+    acescg = colour.decode_bytes(codes, colour.byte_tables("sRGB", "ACEScg"))
+    expected = srgb_to_linear(codes / 255.0) @ np.array(REC709_TO_ACESCG).T
+    assert np.abs(acescg - expected).max() < 1e-4
+    linear = colour.decode_bytes(codes, colour.byte_tables("ACEScg", "ACEScg"))
+    assert np.abs(linear - codes / 255.0).max() < 1e-7
+    with pytest.raises(ValueError, match="not decoded here"):
+        colour.byte_tables("Display P3", "ACEScg")
