@@ -405,7 +405,7 @@ def cmd_apply(args):
     blend = open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
     scene = pick_scene(args.scene)
     objects = objects_to_apply(scene, args.objects)
-    api.set_coefficients(scene, coeffs)
+    api.set_coefficients(scene, _module("blender.preset_io").from_preset_space(coeffs))
     result = api.apply_to_materials(operators.materials_of(objects), scene)
     for name, reason in result.skipped:
         _print(f"skipped material '{name}': {reason}")

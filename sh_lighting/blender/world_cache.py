@@ -8,7 +8,8 @@ give a wrong answer; the key only bounds the dict to one entry per world (and ``
 in all). A ``load_post`` handler (``register_cache``) empties it when a file is loaded.
 
 The signature is a digest of everything ``world_coefficients`` reads:
-* the capture width, whether the world uses nodes (its colour if not);
+* the capture width, whether the world uses nodes (its colour if not), the file's working
+  colour space;
 * every node of its tree and, recursively, of the node groups it uses: type, name, mute,
   every setting (a generic walk of the node's RNA properties, into structs such as colour
   ramps, curves and image users), every unlinked input's value, every link (muted, valid);
@@ -127,7 +128,8 @@ def world_signature(scene, capture_width, images=None):
     The images it covers are appended to the list ``images`` when one is given.
     """
     world_id = scene.world
-    parts = [int(capture_width), world_id.name_full, compat.uses_nodes(world_id)]
+    parts = [int(capture_width), world_id.name_full, compat.uses_nodes(world_id),
+             compat.working_space()]
     animated = world_id.animation_data is not None
     tree = world_id.node_tree if compat.uses_nodes(world_id) else None
     if tree is None:
