@@ -143,7 +143,7 @@ class SphereScene:
         result = materials.apply_to_materials([self.materials["sh"]], self.scene)
         if result.changed != [self.materials["sh"].name]:
             raise RuntimeError(f"could not apply the SH group: {result}")
-        scene_data.set_coefficients(self.scene, coeffs)
+        scene_data.store(self.scene, coeffs, {"source": "SCRIPT"})
 
     def render(self, repeats=1):
         """Render ``repeats`` times; returns (the shortest time in seconds, the last image as

@@ -46,19 +46,19 @@ from .blender.preset_io import (  # presets and interop: JSON, three.js, glTF, F
     shipped_presets,
     user_presets,
 )
+from .blender import compute as _compute
 from .blender import materials as _materials
 from .blender import nodes as _nodes
-from .blender import properties as _properties
 from .blender import scene_data as _scene_data
 from .blender import world as _world
-from .blender import world_cache as _world_cache
 from .core.presets import PresetError
 
 WorldError = _world.WorldError
 
 __all__ = [
     # computing, storing and applying the coefficients
-    "WorldError", "compute_from_world", "get_coefficients", "get_computed", "set_coefficients",
+    "WorldError", "compute_from_world", "get_coefficients", "get_computed", "get_provenance",
+    "set_coefficients",
     "reset", "ensure_node_group", "apply_to_materials", "remove_from_materials",
     # presets and interop
     "FORMATS", "PresetError", "export_preset", "import_preset", "shipped_presets",
@@ -74,17 +74,23 @@ def compute_from_world(scene, capture_width=None):
 
     Reads the Environment Texture image directly when the world is one, else renders a
     ``capture_width`` × ``capture_width/2`` equirectangular capture (default: the scene's
-    override, else the add-on preferences, else 256); an unchanged world reuses its last
-    result without reading the image again. The result also becomes the Reset
-    values. Returns the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
+    override, else the add-on preferences, else 256). The result also becomes the Reset
+    values, and the scene records where it came from (``get_provenance``). Returns the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
     user-facing message, leaving the scene unchanged, when the world cannot be read.
     """
-    return _world_cache.compute_and_store(scene, capture_width)[0]
+    return _compute.compute_and_store(scene, capture_width)[0]
 
 
 def get_coefficients(scene):
-    """The scene's (9, 3) float64 L_lm; a LookupError if they were never set."""
+    """The scene's (9, 3) float64 lighting L_lm = s_lm · c_lm (each coefficient's gain times
+    its RGB custom property); a LookupError if they were never set."""
     return _scene_data.get_coefficients(scene)
+
+
+def get_provenance(scene):
+    """Where the stored values came from, as recorded when they were stored: a dict with
+    "source" ("WORLD", "PRESET" or "SCRIPT") and what is known of it ({} if unknown)."""
+    return _scene_data.provenance(scene)
 
 
 def get_computed(scene):
@@ -92,13 +98,15 @@ def get_computed(scene):
     return _scene_data.get_computed(scene)
 
 
-def set_coefficients(scene, coeffs):
-    """Store (9, 3) L_lm on ``scene`` (a ValueError, nothing changed, if not finite 9×3).
+def set_coefficients(scene, coeffs, provenance=None):
+    """Store (9, 3) L_lm on ``scene`` (a ValueError, nothing changed, if not finite 9×3):
+    the RGB properties get ``coeffs``, the gains 1.
 
-    Materials that SH Lighting was applied to follow at the next render: they read the
-    values at render time. Returns the stored float64 copy.
+    ``provenance``: what to record about the values (default ``{"source": "SCRIPT"}``).
+    The scene is tagged, so open viewports show the new values at once, and materials that
+    SH Lighting was applied to follow at the next render. Returns the stored float64 copy.
     """
-    return _properties.store_coefficients(scene, coeffs)
+    return _scene_data.store(scene, coeffs, provenance or {"source": "SCRIPT"})
 
 
 def reset(scene):
@@ -106,12 +114,13 @@ def reset(scene):
 
     A LookupError if nothing was computed yet. Returns the restored (9, 3) array.
     """
-    return _properties.reset_coefficients(scene)
+    return _scene_data.reset(scene)
 
 
-def ensure_node_group(scene):
-    """The "SH Irradiance" shader node group reading ``scene``'s coefficients, created once."""
-    return _nodes.ensure_node_group(scene)
+def ensure_node_group():
+    """The file's "SH Irradiance" shader node group (all nine terms, reading the coefficients
+    of whatever scene renders it), created once, its nodes rebuilt."""
+    return _nodes.ensure_node_group()
 
 
 def apply_to_materials(materials, scene=None):

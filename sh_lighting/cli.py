@@ -82,9 +82,8 @@ def _print(*args, **kwargs):
 
 def coefficient_table(coeffs):
     """The lines of the coefficient table: name, R, G, B and what the coefficient does."""
-    from .core.sh import COEFFICIENT_NAMES
+    from .core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES as phrases
 
-    phrases = _module("blender.properties").COEFFICIENT_PHRASES
     lines = [f"{'':5} {'R':>11} {'G':>11} {'B':>11}   what it does"]
     for name, rgb, phrase in zip(COEFFICIENT_NAMES, coeffs, phrases):
         lines.append(f"{name:5} {rgb[0]:11.5f} {rgb[1]:11.5f} {rgb[2]:11.5f}   {phrase}")
@@ -405,10 +404,13 @@ def cmd_apply(args):
     blend = open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
     scene = pick_scene(args.scene)
     objects = objects_to_apply(scene, args.objects)
-    api.set_coefficients(scene, _module("blender.preset_io").from_preset_space(coeffs))
+    provenance = _module("blender.preset_io").preset_provenance(preset, {})
+    api.set_coefficients(scene, coeffs, provenance)
     result = api.apply_to_materials(operators.materials_of(objects), scene)
     for name, reason in result.skipped:
         _print(f"skipped material '{name}': {reason}")
+    for name in operators.objects_without_material(objects):
+        _print(f"skipped object '{name}': it has no material (give it one to light it)")
     if not result.changed:
         raise CommandError(
             f"no material was changed ({len(result.skipped)} skipped): nothing saved"

@@ -29,3 +29,9 @@ def write_exr(path, pixels):
 def write_constant_exr(path, rgb, width=16, height=8):
     """A constant-colour EXR of ``width`` × ``height`` texels (alpha 1)."""
     return write_exr(path, np.broadcast_to(np.asarray(rgb, dtype=np.float32), (height, width, 3)))
+
+
+# Provenance records for tests that store coefficients (``scene_data.store``): values set by a
+# script, and values standing for ones computed from the world (they become the Reset values).
+SCRIPT = {"source": "SCRIPT"}
+WORLD = {"source": "WORLD"}

@@ -2,8 +2,8 @@
 
 Each function takes the scene (never ``bpy.context``), reads its coefficients
 (``scene_data.get_coefficients``: a LookupError when there are none), lets the core compute,
-and stores the result with ``properties.store_coefficients`` (edits are not new Reset
-values). Errors are ValueError/LookupError with a message for the user; nothing is changed
+and stores the result with ``scene_data.store`` (provenance: where the values came from,
+with the edit; edits are not new Reset values). Errors are ValueError/LookupError with a message for the user; nothing is changed
 then. Angles are in radians, like everywhere in Blender's Python API.
 
 The world-reading tools (Match Mapping, the window's error against the world, Split Sun) need
@@ -19,7 +19,6 @@ import numpy as np
 from mathutils import Matrix
 
 from ..core import edits, windowing
-from ..core.colour import luminance_weights
 from ..core.minimum import irradiance_minimum, negative_light_warning
 from ..core.rotation import rotate_coefficients
 from ..core.sh import spread_normals
@@ -31,7 +30,7 @@ from ..core.world_map import (
     sun_light_rotation,
     to_world_direction,
 )
-from . import compat, properties, scene_data, world
+from . import scene_data, world
 
 SUN_NAME = "SH Sun"
 SUN_MARKER = "sh_lighting_sun"  # custom property on the Sun object Split Sun made
@@ -54,7 +53,8 @@ class DesignError(ValueError):
 
 def _edit(scene, function, *args, **kwargs):
     coeffs = scene_data.get_coefficients(scene)
-    return properties.store_coefficients(scene, function(coeffs, *args, **kwargs))
+    edited = function(coeffs, *args, **kwargs)
+    return scene_data.store(scene, edited, scene_data.edited(scene, function.__name__))
 
 
 def rotate(scene, yaw=0.0, pitch=0.0, roll=0.0):
@@ -78,7 +78,7 @@ def saturation(scene, amount, band=None):
         band = BANDS[band]
     elif isinstance(band, (int, np.integer)):
         band = (int(band),)
-    return _edit(scene, edits.saturation, amount, band, luminance())
+    return _edit(scene, edits.saturation, amount, band)
 
 
 def band_gains(scene, ambient=1.0, directional=1.0, quadratic=1.0):
@@ -93,12 +93,7 @@ def flip_vertical(scene):
 
 def describe(scene):
     """Nine short strings: what each coefficient does in the scene's lighting."""
-    return edits.describe_coefficients(scene_data.get_coefficients(scene), luminance())
-
-
-def luminance():
-    """The luminance weights of the file's working colour space (``core.colour``)."""
-    return luminance_weights(compat.working_space())
+    return edits.describe_coefficients(scene_data.get_coefficients(scene))
 
 
 def negative_warning(scene):
@@ -143,7 +138,7 @@ def match_mapping(scene):
             "Environment Texture: there is no rotation to match"
         )
     rotated = rotate_coefficients(coeffs, mapping_rotation(image.rotation))
-    return properties.store_coefficients(scene, rotated)
+    return scene_data.store(scene, rotated, scene_data.edited(scene, "match_mapping"))
 
 
 # -- windows -----------------------------------------------------------------------------------
@@ -247,7 +242,9 @@ def apply_window(scene, kind, width=DEFAULT_WIDTH):
     coeffs = scene_data.get_coefficients(scene)
     window = window_for(kind, coeffs, width)
     costs, note = _world_costs(scene, coeffs, kind, window, width)
-    stored = properties.store_coefficients(scene, windowing.apply_window(coeffs, window))
+    stored = scene_data.store(
+        scene, windowing.apply_window(coeffs, window), scene_data.edited(scene, f"{kind} window")
+    )
     return WindowResult(kind, window, stored, costs, note)
 
 
@@ -305,20 +302,23 @@ def split_sun(scene):
     nothing, when there is none. Otherwise creates (or updates) the Sun object "SH Sun",
     aimed so that it shines from the sun's direction in the world (Mapping rotation applied),
     with its angular diameter, colour and a strength giving exactly the irradiance of the
-    texels taken out (× the Background's Strength), and stores the coefficients of the
-    world without them. Returns a ``SunInfo``.
+    texels taken out (× the Background's Strength), and takes the sun's own coefficients out
+    of the Reset values and of the current ones (so earlier edits are kept, and Reset does not
+    bring the sun back). When the Reset values were split already (their provenance names the
+    sun), only the light is updated. Returns a ``SunInfo``.
     """
     image = _world_image(scene, "Split Sun")
     if not image.strength > 0.0:
         return None  # a black (or negative) world has no sun to split off
     pixels = image.pixels()
-    sun = detect_sun(pixels, luminance=luminance())
+    sun = detect_sun(pixels)
     if sun is None:
         return None
     rest = map_coefficients(remove_sun(pixels, sun), image.strength, image.rotation)
+    sun_coeffs = map_coefficients(pixels, image.strength, image.rotation) - rest
     direction = to_world_direction(sun.direction, image.rotation)
     strength = sun.strength * image.strength
-    scene_data.check_coefficients_9x3(rest)  # fail before anything changes
+    scene_data.validate(rest)  # fail before anything changes
 
     obj, created = _sun_object(scene)
     light = obj.data
@@ -327,6 +327,26 @@ def split_sun(scene):
     light.angle = sun.angular_diameter
     obj.rotation_mode = "XYZ"
     obj.rotation_euler = Matrix(sun_light_rotation(direction).tolist()).to_euler("XYZ")
-    stored = properties.store_coefficients(scene, rest)
+    stored = _take_out_sun(scene, image, rest, sun_coeffs, obj.name)
     return SunInfo(obj.name, created, direction, sun.angular_diameter, strength,
                    np.array(sun.colour), sun.power_fraction, stored)
+
+
+def _take_out_sun(scene, image, rest, sun_coeffs, light):
+    """Store the Reset values and the current ones without the sun (see ``split_sun``)."""
+    computed = scene_data.get_computed(scene)
+    record = scene_data.computed_provenance(scene)
+    current = scene_data.get_coefficients(scene) if scene_data.has_coefficients(scene) else None
+    if computed is not None and record.get("sun"):
+        return current  # split already: the coefficients hold no sun
+    edited = current is not None and (computed is None or not np.array_equal(current, computed))
+    previous = scene_data.provenance(scene)
+    if computed is None:
+        record = {"source": "WORLD", "world": image.world, "method": "IMAGE",
+                  "image": image.image.name}
+        computed = rest + sun_coeffs
+    stored = scene_data.store(scene, computed - sun_coeffs, {**record, "sun": light})
+    if edited:
+        previous["edit"] = "split_sun"
+        stored = scene_data.store(scene, current - sun_coeffs, previous)
+    return stored

@@ -16,8 +16,8 @@ Materials without a diffuse part are left alone and reported as skipped: a Surfa
 (mixes and sums of) Emission, Glass, Refraction, Transparent, Holdout, Glossy, Metallic, hair,
 Ray Portal or Background shaders, or of a Principled BSDF whose unlinked Metallic or
 Transmission Weight is 1; an unconnected Surface (volume-only or empty). A node group in the
-surface counts as possibly diffuse. Only the materials given are changed, and the shared group
-is rebuilt only when the lighting needs another layout (``nodes.ensure_node_group``).
+surface counts as possibly diffuse. Only the materials given are changed; the shared group is
+(re)built once per call (``nodes.ensure_node_group``).
 Every material is checked before it is changed; an error while changing it is rolled back.
 """
 
@@ -73,8 +73,8 @@ def is_applied(material):
 def apply_to_materials(materials, scene):
     """Drive each material's surface by the SH group; returns ``Result(changed, skipped)``."""
     changed, skipped = [], []
-    # The group, fitted once, when the first material gets it (an error: again next time).
-    group = functools.cache(lambda: ensure_node_group(scene))
+    # The group, built once, when the first material gets it (an error: again next time).
+    group = functools.cache(ensure_node_group)
     for material in _unique(materials):
         name = _name(material)
         try:

@@ -1,4 +1,4 @@
-"""Operators: Compute from World, Reset, Apply, Remove, Refit.
+"""Operators: Compute from World, Reset, Apply, Remove.
 
 Each operator reads the context once, hands plain values (scene, materials, widths) to the
 logic in ``world``, ``scene_data`` and ``materials``, and turns their exceptions into an
@@ -10,7 +10,7 @@ import time
 
 import bpy
 
-from . import materials, nodes, properties, scene_data, world_cache
+from . import compute, materials, scene_data
 from .polls import coefficients_poll, scene_poll
 
 
@@ -29,6 +29,23 @@ def materials_of(objects):
             if slot.material is not None:
                 found.setdefault(slot.material.name_full, slot.material)
     return list(found.values())
+
+
+def objects_without_material(objects):
+    """Names of the ``objects`` that could have materials but have none in any slot."""
+    return [
+        obj.name for obj in objects
+        if hasattr(getattr(obj, "data", None), "materials")
+        and not any(slot.material is not None for slot in obj.material_slots)
+    ]
+
+
+def bare_objects_note(names, limit=3):
+    """"N object(s) have no material (a, b, ...): give them a material first", or ""."""
+    if not names:
+        return ""
+    shown = ", ".join(names[:limit]) + (", ..." if len(names) > limit else "")
+    return f"{len(names)} object(s) have no material ({shown}): give them a material first"
 
 
 def _skip_reasons(result, limit=3):
@@ -60,22 +77,21 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return scene_poll(cls, context)
+        if not scene_poll(cls, context):
+            return False
+        if context.scene.world is None:
+            cls.poll_message_set("The scene has no world: add one in the Scene properties")
+            return False
+        return True
 
     def execute(self, context):
         start = time.perf_counter()
         try:
-            _coeffs, info = world_cache.compute_and_store(context.scene)
+            _coeffs, info = compute.compute_and_store(context.scene)
         except ValueError as error:  # WorldError and invalid coefficients
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         elapsed = time.perf_counter() - start
-        if info.cached:
-            self.report(
-                {"INFO"}, f"SH lighting reused: world '{info.world}' has not changed since it "
-                "was last computed"
-            )
-            return {"FINISHED"}
         origin = "the world image" if info.source == "image" else "a capture of the world"
         self.report({"INFO"}, f"SH lighting computed from {origin} in {elapsed:.2f} s")
         return {"FINISHED"}
@@ -99,7 +115,7 @@ class SHLIGHT_OT_reset(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            properties.reset_coefficients(context.scene)
+            scene_data.reset(context.scene)
         except (LookupError, TypeError, ValueError) as error:
             self.report({"ERROR"}, f"Cannot reset: {error}")
             return {"CANCELLED"}
@@ -121,7 +137,12 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
 
     def execute(self, context):
         scene = context.scene
-        mats = materials_of(objects_for_target(context, scene.sh_lighting.apply_target))
+        objects = objects_for_target(context, scene.sh_lighting.apply_target)
+        mats = materials_of(objects)
+        bare = bare_objects_note(objects_without_material(objects))
+        if not mats and bare:
+            self.report({"WARNING"}, f"SH lighting applied to no material: {bare}")
+            return {"CANCELLED"}
         try:
             result = materials.apply_to_materials(mats, scene)
         except (LookupError, ValueError) as error:
@@ -132,7 +153,9 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
         reasons = _skip_reasons(result)
         if reasons:
             message += " (" + "; ".join(reasons) + ")"
-        self.report({"WARNING"} if skipped and not changed else {"INFO"}, message)
+        if bare:
+            message += f"; {bare}"
+        self.report({"WARNING"} if (skipped or bare) and not changed else {"INFO"}, message)
         return {"FINISHED"}
 
 
@@ -163,54 +186,10 @@ class SHLIGHT_OT_remove(bpy.types.Operator):
         return {"FINISHED"}
 
 
-def fit_summary(report):
-    """One line about a ``nodes.FitReport``: node count, what was left out, its exact bound."""
-    left_out = ", ".join(report.omitted) if report.omitted else "nothing"
-    text = f"{report.node_count} nodes; left out: {left_out}"
-    if report.omitted:
-        text += f" (error ≤ {100.0 * report.bound:.3g} % of the mean irradiance)"
-    return text
-
-
-class SHLIGHT_OT_refit(bpy.types.Operator):
-    """Fit the SH Irradiance node group to the coefficients of every scene at every keyframed
-    frame: only the terms they need, scalar math for grey lighting, a clamp only if needed"""
-
-    bl_idname = "shlight.refit"
-    bl_label = "Refit Node Group"
-    bl_options = {"REGISTER", "UNDO"}
-
-    @classmethod
-    def poll(cls, context):
-        if not scene_poll(cls, context):
-            return False
-        if nodes.find_node_group() is None:
-            cls.poll_message_set("No SH Irradiance node group yet: Apply to materials first")
-            return False
-        return True
-
-    def execute(self, context):
-        report = nodes.refit_node_group(context.scene)
-        state = "rebuilt" if report.rebuilt else "already fitted"
-        self.report({"INFO"}, f"SH node group {state}: {fit_summary(report)}")
-        return {"FINISHED"}
-
-
 classes = (
     SHLIGHT_OT_compute_from_world,
     SHLIGHT_OT_reset,
     SHLIGHT_OT_apply,
     SHLIGHT_OT_remove,
-    SHLIGHT_OT_refit,
 )
-_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
-
-
-def register():
-    _register_classes()
-    world_cache.register_cache()
-
-
-def unregister():
-    world_cache.unregister_cache()
-    _unregister_classes()
+register, unregister = bpy.utils.register_classes_factory(classes)

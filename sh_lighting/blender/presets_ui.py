@@ -10,8 +10,9 @@ follows Blender's conventions without executing anything:
 * ``SHLIGHT_MT_presets`` lists the shipped presets (the package's ``presets`` folder) and, under
   them, the user's presets from Blender's user preset folder
   (``<user scripts>/presets/sh_lighting``, beside Blender's own presets); each entry runs
-  ``shlight.load_preset`` with the file's path, and the menu's label becomes the name of the
-  last preset loaded (what ``script.execute_preset`` does). User entries have a "−" button
+  ``shlight.load_preset`` with the file's path, and the menu's label is the name of the
+  preset the scene's values were loaded from (its recorded provenance, while that file
+  exists and no design edit followed), else "Presets". User entries have a "−" button
   (``shlight.preset_remove``, with a confirmation); shipped presets have none and
   ``preset_io.remove_user_preset`` refuses them anyway.
 * "+" (``shlight.preset_add``) saves the current coefficients as a user preset under a
@@ -36,7 +37,7 @@ from bpy.props import BoolProperty, EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ..core.presets import PresetError
-from . import panels, preset_io
+from . import panels, preset_io, scene_data
 from .polls import coefficients_poll, scene_poll
 
 LOAD = "shlight.load_preset"
@@ -85,9 +86,6 @@ def load_preset_file(operator, scene, path):
         operator.report({"ERROR"}, f"Preset not loaded, nothing changed: {error}")
         return {"CANCELLED"}
     name = os.path.splitext(os.path.basename(path))[0]
-    shipped_dir = preset_io.shipped_preset_dir()
-    shipped = shipped_dir is not None and Path(path).resolve().parent == shipped_dir.resolve()
-    SHLIGHT_MT_presets.bl_label = display_name(name, shipped)
     operator.report({"INFO"}, f"Loaded SH lighting preset '{name}'")
     return {"FINISHED"}
 
@@ -221,7 +219,6 @@ class SHLIGHT_OT_preset_add(bpy.types.Operator):
         except (LookupError, OSError, ValueError) as error:
             self.report({"ERROR"}, f"Preset not saved: {error}")
             return {"CANCELLED"}
-        SHLIGHT_MT_presets.bl_label = display_name(path.stem, shipped=False)
         self.report({"INFO"}, f"Saved SH lighting preset '{self.name.strip()}' to {path}")
         return {"FINISHED"}
 
@@ -275,18 +272,32 @@ def draw_preset_menu(layout):
     layout.operator(ADD, text="Save Current as Preset...", icon="ADD")
 
 
+def menu_label(scene):
+    """The preset menu's label for ``scene``: the preset its values were loaded from, while
+    that file exists and no design edit or Compute followed, else "Presets"."""
+    record = scene_data.provenance(scene)
+    path = record.get("path")
+    if record.get("source") != "PRESET" or "edit" in record or not path:
+        return SHLIGHT_MT_presets.bl_label
+    path = Path(path)
+    if not path.is_file():
+        return SHLIGHT_MT_presets.bl_label
+    shipped_dir = preset_io.shipped_preset_dir()
+    shipped = shipped_dir is not None and path.parent == shipped_dir.resolve()
+    return display_name(path.stem, shipped)
+
+
 class SHLIGHT_MT_presets(bpy.types.Menu):
-    # The label is replaced by the name of the last preset loaded, as in Blender's preset menus.
     bl_label = "Presets"
 
     def draw(self, _context):
         draw_preset_menu(self.layout)
 
 
-def draw_presets(layout, _context):
+def draw_presets(layout, context):
     """The Presets sub-panel: the menu with Save, then Import and Export."""
     row = layout.row(align=True)
-    row.menu(SHLIGHT_MT_presets.__name__, text=SHLIGHT_MT_presets.bl_label)
+    row.menu(SHLIGHT_MT_presets.__name__, text=menu_label(context.scene))
     row.operator(ADD, text="", icon="ADD")
     row = layout.row(align=True)
     row.operator(IMPORT, text="Import", icon="IMPORT")

@@ -1,23 +1,50 @@
-"""Where a scene keeps its SH lighting: plain custom properties, readable without the add-on.
+"""Where a scene keeps its SH lighting, and ``store``: the one function that writes it.
 
-The 9 RGB lighting coefficients L_lm (raw radiance, Blender world axes) live in
-``scene["sh_L00"]`` ... ``scene["sh_L22"]``, each a 3-float array. Plain custom properties
-(not a registered PropertyGroup) are what an Attribute node of type View Layer can read at
-render time in a Blender where this add-on is not installed (REFERENCE.md §3), so a saved
-.blend renders the same on a render farm. They are keyframable and undoable like any property.
+Plain custom properties, readable without the add-on (REFERENCE.md §3: an Attribute node of
+type View Layer reads them at render time in any Blender, so a saved .blend renders the same
+on a render farm); all are keyframable and undoable like any property:
 
-``scene["sh_computed"]`` keeps the last values computed from the world (27 floats), so that
-Reset can return to them.
+* ``scene["sh_L00"]`` ... ``scene["sh_L22"]``: c_lm, one RGB triple per coefficient;
+* ``scene["sh_L00_gain"]`` ... ``scene["sh_L22_gain"]``: s_lm, one float per coefficient
+  (1 after every ``store``), the row's strength an artist drags or keyframes;
+* the lighting is their product L_lm = s_lm · c_lm (raw radiance, Blender world axes):
+  the node group multiplies them, ``get_coefficients`` returns the products;
+* ``scene["sh_computed"]`` (27 floats): the values last computed from the world (Reset),
+  ``scene["sh_computed_provenance"]`` their provenance;
+* ``scene["sh_provenance"]``: where the stored values came from, recorded when known by the
+  writer (``store``), never guessed afterwards: a dict with "source" ("WORLD", "PRESET",
+  "SCRIPT") and what is known of it (world and image, preset name and path, ...), plus
+  "edit" (the last design edit) once the values were edited by a design tool.
+
+``store(scene, coeffs, provenance)`` validates, writes c = coeffs and s = 1, records the
+provenance (and, for "WORLD", the Reset values), gives the properties their UI data (a
+description, soft limits following the values so that a drag is not too coarse), tags the
+scene for the depsgraph and redraws the panels. Every writer of the coefficients calls it.
+A field edit or keyframe changes a property directly (Blender tags the scene itself); a
+Python script writing ``scene["sh_L10"] = ...`` must call ``scene.update_tag()`` afterwards
+for open viewports to see it (a render always reads the current values).
 """
 
+import bpy
 import numpy as np
 
 from ..core.coefficients import check_coefficients
-from ..core.sh import COEFFICIENT_NAMES
+from ..core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
 
 # Attribute/custom-property names: "L1-1" -> "sh_L1m1" (no '-' inside an attribute name).
 PROPERTY_NAMES = tuple("sh_" + name.replace("-", "m") for name in COEFFICIENT_NAMES)
+GAIN_NAMES = tuple(name + "_gain" for name in PROPERTY_NAMES)
 COMPUTED_PROPERTY = "sh_computed"
+PROVENANCE_PROPERTY = "sh_provenance"
+COMPUTED_PROVENANCE_PROPERTY = "sh_computed_provenance"
+SOURCES = ("WORLD", "PRESET", "SCRIPT")
+
+# Soft limits of a channel: ±SOFT_RANGE × the largest magnitude of the stored values (a drag
+# across the field spans a few times the lighting), at least SOFT_FLOOR.
+SOFT_RANGE = 2.0
+SOFT_FLOOR = 1e-3
+GAIN_SOFT_MIN, GAIN_SOFT_MAX = -2.0, 4.0
+PRECISION = 4
 
 
 def has_coefficients(scene):
@@ -25,32 +52,98 @@ def has_coefficients(scene):
     return all(name in scene for name in PROPERTY_NAMES)
 
 
+def gain(scene, index):
+    """s_lm of coefficient ``index`` (1.0 when the property is missing)."""
+    return float(scene.get(GAIN_NAMES[index], 1.0))
+
+
 def get_coefficients(scene):
-    """The scene's (9, 3) float64 L_lm; a LookupError if they were never set."""
+    """The scene's (9, 3) float64 lighting L_lm = s_lm · c_lm; a LookupError if never set."""
     missing = [name for name in PROPERTY_NAMES if name not in scene]
     if missing:
         raise LookupError(
             f"scene '{scene.name}' has no SH lighting coefficients yet ({', '.join(missing)} "
             "missing): run Compute from World or set them first"
         )
-    return np.array([list(scene[name]) for name in PROPERTY_NAMES], dtype=np.float64)
+    c = np.array([list(scene[name]) for name in PROPERTY_NAMES], dtype=np.float64)
+    s = np.array([gain(scene, index) for index in range(9)])
+    return c * s[:, None]
 
 
-def check_coefficients_9x3(coeffs):
-    """A finite (9, 3) float64 copy of ``coeffs`` or a ValueError saying what is wrong
-    (``core.coefficients.check_coefficients``: numbers only, within Blender's float32 range).
-    """
+def validate(coeffs):
+    """A finite (9, 3) float64 copy of ``coeffs`` or a ValueError saying what is wrong: the one
+    validation before coefficients are stored (``core.coefficients.check_coefficients``:
+    numbers only, within Blender's float32 range)."""
     return check_coefficients(coeffs)
 
 
-def set_coefficients(scene, coeffs, computed=False):
-    """Store (9, 3) L_lm on ``scene``; with ``computed`` also as the Reset values."""
-    c = check_coefficients_9x3(coeffs)
-    for name, rgb in zip(PROPERTY_NAMES, c):
+def _check_provenance(provenance):
+    if not isinstance(provenance, dict) or provenance.get("source") not in SOURCES:
+        raise ValueError(
+            f"provenance must be a dict with 'source' one of {', '.join(SOURCES)}, "
+            f"got {provenance!r}"
+        )
+    for key, value in provenance.items():
+        if not isinstance(key, str) or not isinstance(value, (str, int, float, bool, list)):
+            raise ValueError(f"provenance entry {key!r}: {value!r} is not text, number or list")
+    return dict(provenance)
+
+
+def store(scene, coeffs, provenance):
+    """Write (9, 3) L_lm on ``scene`` as c = ``coeffs``, s = 1: the one write of coefficients.
+
+    ``provenance``: a dict with "source" (``SOURCES``) and what the writer knows of it; a
+    "WORLD" record without "edit" (values as computed) also makes them the Reset values. Validates first (ValueError, nothing
+    changed), then writes, records, sets the UI data, tags the scene for the depsgraph (the
+    viewports and the next render see the new values) and redraws the panels. Returns the
+    stored float64 copy.
+    """
+    c = validate(coeffs)
+    record = _check_provenance(provenance)
+    for name, gain_name, rgb in zip(PROPERTY_NAMES, GAIN_NAMES, c):
         scene[name] = [float(v) for v in rgb]
-    if computed:
+        scene[gain_name] = 1.0
+    if record["source"] == "WORLD" and "edit" not in record:
         scene[COMPUTED_PROPERTY] = [float(v) for v in c.ravel()]
+        scene[COMPUTED_PROVENANCE_PROPERTY] = record
+    scene[PROVENANCE_PROPERTY] = record
+    ensure_ui(scene)
+    scene.update_tag()
+    redraw()
     return c
+
+
+def reset(scene):
+    """Store the values last computed from the world again (Reset), with their provenance.
+
+    A LookupError if nothing was computed yet. Returns the restored (9, 3) array.
+    """
+    computed = get_computed(scene)
+    if computed is None:
+        raise LookupError("Nothing to reset to: run Compute from World first")
+    return store(scene, computed, computed_provenance(scene) or {"source": "WORLD"})
+
+
+def edited(scene, edit):
+    """The provenance of the scene's values after design edit ``edit`` (e.g. "exposure"):
+    where they came from, with "edit" set."""
+    record = provenance(scene)
+    record["edit"] = str(edit)
+    return record
+
+
+def provenance(scene):
+    """The recorded provenance of the stored values as a plain dict ({} when unknown)."""
+    return _as_dict(scene.get(PROVENANCE_PROPERTY))
+
+
+def computed_provenance(scene):
+    """The provenance of the Reset values ({} when unknown)."""
+    return _as_dict(scene.get(COMPUTED_PROVENANCE_PROPERTY))
+
+
+def _as_dict(value):
+    return value.to_dict() if hasattr(value, "to_dict") else {}
 
 
 def get_computed(scene):
@@ -58,3 +151,51 @@ def get_computed(scene):
     if COMPUTED_PROPERTY not in scene:
         return None
     return np.array(list(scene[COMPUTED_PROPERTY]), dtype=np.float64).reshape(9, 3)
+
+
+def coefficient_description(index):
+    """The tooltip of coefficient ``index``: name, what it does, what the numbers are."""
+    return (
+        f"{COEFFICIENT_NAMES[index]}, {COEFFICIENT_PHRASES[index]}: signed RGB coefficient "
+        "c_lm (radiance, Blender world axes); the lighting is gain × c_lm; keyframable"
+    )
+
+
+def gain_description(index):
+    """The tooltip of gain ``index``."""
+    return (
+        f"{COEFFICIENT_NAMES[index]} strength s_lm, {COEFFICIENT_PHRASES[index]}: scales the "
+        "RGB coefficient (lighting = s_lm × c_lm; 1 after Compute, Reset or a preset); "
+        "keyframable"
+    )
+
+
+def ensure_ui(scene):
+    """Give the coefficient and gain custom properties their UI data: descriptions, soft
+    limits following the stored values, plain number fields (subtype NONE, which neither
+    clamps to 0-1 nor shows a colour swatch)."""
+    values = [list(scene[name]) for name in PROPERTY_NAMES if name in scene]
+    largest = float(np.max(np.abs(values))) if values else 0.0
+    soft = max(SOFT_RANGE * largest, SOFT_FLOOR)
+    for index, (name, gain_name) in enumerate(zip(PROPERTY_NAMES, GAIN_NAMES)):
+        if name in scene:
+            scene.id_properties_ui(name).update(
+                subtype="NONE", description=coefficient_description(index),
+                soft_min=-soft, soft_max=soft, precision=PRECISION, step=1,
+            )
+        if gain_name in scene:
+            scene.id_properties_ui(gain_name).update(
+                subtype="NONE", description=gain_description(index), default=1.0,
+                soft_min=GAIN_SOFT_MIN, soft_max=GAIN_SOFT_MAX, precision=3, step=1,
+            )
+
+
+def redraw():
+    """Redraw every area of every window (the panels show the new values at once); nothing
+    in background mode, where there are no windows."""
+    window_manager = getattr(bpy.context, "window_manager", None)
+    if bpy.app.background or window_manager is None:
+        return
+    for window in window_manager.windows:
+        for area in window.screen.areas:
+            area.tag_redraw()

@@ -22,6 +22,8 @@ whose file is missing) raise ``WorldError`` with what to do; nothing in ``bpy.da
 Coefficients are in the file's working colour space (``working_space``: "Linear Rec.709"
 before Blender 5.0), like everything Blender renders; exports convert them
 (``core.colour.convert_coefficients``).
+
+``compute.compute_and_store`` stores its result on the scene (Compute from World).
 """
 
 import time
@@ -73,7 +75,6 @@ class WorldInfo:
     strength: float | None = None
     reason: str = ""
     capture_width: int | None = None
-    cached: bool = False  # reused by ``world_cache``; ``elapsed`` is then the look-up's time
 
 
 @dataclass(frozen=True, eq=False)

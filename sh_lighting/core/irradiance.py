@@ -28,8 +28,8 @@ C4 = A0 * 0.5 * sqrt(1.0 / pi)  # 0.886227
 C5 = A2 * 0.25 * sqrt(5.0 / pi)  # 0.247708
 
 # Largest |constant × polynomial| over the unit sphere of each term of eq. 13 (c4; 2 c2 for
-# y, z, x; c1 for 2xy, 2yz, 2xz and x² − y²; c3 − c5 = 2 c5 for c3 z² − c5; table in
-# ``pruning``): TERM_PEAKS[i] · |L_i| is the most term i adds to or removes from E(n) anywhere.
+# y, z, x; c1 for 2xy, 2yz, 2xz and x² − y²; c3 − c5 = 2 c5 for c3 z² − c5):
+# TERM_PEAKS[i] · |L_i| is the most term i adds to or removes from E(n) anywhere.
 TERM_PEAKS = np.array(
     [C4, 2.0 * C2, 2.0 * C2, 2.0 * C2, C1, C1, max(abs(-C5), abs(C3 - C5)), C1, C1]
 )

@@ -24,6 +24,20 @@ Y20 = 0.25 * sqrt(5.0 / pi)  # 0.315392: (3z² - 1)
 Y22 = 0.25 * sqrt(15.0 / pi)  # 0.546274: (x² - y²)
 
 COEFFICIENT_NAMES = ("L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22")
+# What each coefficient does, in Blender world axes (REFERENCE.md §1: Y1-1 ∝ y, Y10 ∝ z,
+# Y11 ∝ x, Y2-2 ∝ xy, Y2-1 ∝ yz, Y20 ∝ 3z² - 1, Y21 ∝ xz, Y22 ∝ x² - y²): the one wording of
+# the nine terms (panel, tooltips, command line).
+COEFFICIENT_PHRASES = (
+    "ambient (overall brightness)",
+    "light from +Y vs −Y",
+    "light from above vs below",
+    "light from +X vs −X",
+    "xy diagonal",
+    "yz diagonal",
+    "top/bottom vs horizon",
+    "xz diagonal",
+    "x vs y axis",
+)
 
 
 def sh_index(l, m):

@@ -13,11 +13,15 @@ from types import SimpleNamespace
 import bpy
 import numpy as np
 import pytest
-from blender_files import write_exr
+from blender_files import SCRIPT, WORLD, write_exr
+from blender_scenes import (
+    EULER, STRENGTH, SUN_IMAGE_DIRECTION, SUN_RADIANCE, SUN_RGB, H, W, add_mapping,
+    environment_world, run_execute, sky_map, sunny_map,
+)
 from numpy.testing import assert_allclose, assert_array_equal
 
 import sh_lighting
-from sh_lighting.blender import compat, design, design_ui, previews, properties, scene_data
+from sh_lighting.blender import compat, compute, design, design_ui, previews, scene_data
 from sh_lighting.blender.images import image_pixels
 from sh_lighting.blender.world import world_coefficients
 from sh_lighting.core import edits, windowing
@@ -46,15 +50,6 @@ KNOWN = np.array(
         [-0.1, 0.2, 0.3],
     ]
 )
-H, W = 64, 128  # world maps: texels of 2.8°
-SKY = np.array([0.6, 0.7, 0.9])
-GROUND = np.array([0.25, 0.2, 0.15])
-SUN_RGB = np.array([1.0, 0.85, 0.6])
-SUN_RADIANCE = 2000.0
-SUN_IMAGE_DIRECTION = np.array([0.5, -0.4, 0.6]) / np.linalg.norm([0.5, -0.4, 0.6])
-SUN_RADIUS = np.radians(4.0)
-EULER = (0.3, -0.2, 1.1)
-STRENGTH = 1.5
 # The maps are float32 EXRs read back exactly; what is derived from them is float32 rounding
 # away from a float64 prediction; Blender stores light values as float32.
 FLOAT32 = 2e-6
@@ -67,68 +62,8 @@ BYTE = 0.5 / 255 + 1e-6
 
 
 
-def environment_world(scene, path, strength=1.0, rotation=None):
-    """[Texture Coordinate → Mapping →] Environment Texture → Background → World Output."""
-    world = bpy.data.worlds.new("Design")
-    tree = compat.ensure_node_tree(world)
-    background = tree.nodes["Background"]
-    background.inputs["Strength"].default_value = strength
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(path)
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    if rotation is not None:
-        add_mapping(world, rotation)
-    scene.world = world
-    return world
-
-
-def add_mapping(world, rotation):
-    tree = world.node_tree
-    texture = next(n for n in tree.nodes if n.type == "TEX_ENVIRONMENT")
-    coordinates = tree.nodes.new("ShaderNodeTexCoord")
-    mapping = tree.nodes.new("ShaderNodeMapping")
-    mapping.inputs["Rotation"].default_value = rotation
-    tree.links.new(coordinates.outputs["Generated"], mapping.inputs["Vector"])
-    tree.links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
-
-
-def sky_map(height=H, width=W):
-    """Constant sky over constant ground: the ring around the sun is all sky, so the texels
-    Split Sun takes out get exactly the sky's value back."""
-    d = texel_directions(height, width)
-    return np.where(d[..., 2:] > 0.0, SKY, GROUND).astype(np.float32)
-
-
-def disc_mask(height=H, width=W):
-    return texel_directions(height, width) @ SUN_IMAGE_DIRECTION > math.cos(SUN_RADIUS)
-
-
-def sunny_map(sky=None):
-    """``sky_map`` plus a disc of SUN_RADIANCE · SUN_RGB: (pixels float32, disc mask)."""
-    sky = sky_map() if sky is None else sky
-    disc = disc_mask()
-    return (sky + disc[..., None] * SUN_RADIANCE * SUN_RGB).astype(np.float32), disc
-
-
 def solid_angles(mask):
     return np.broadcast_to(texel_solid_angles(*mask.shape)[:, None], mask.shape)[mask]
-
-
-class Recorder:
-    """Stands in for the operator instance when calling ``execute`` directly: keeps reports."""
-
-    def __init__(self, **props):
-        self.reports = []
-        self.__dict__.update(props)
-
-    def report(self, kind, message):
-        self.reports.append((set(kind), message))
-
-
-def run_execute(cls, **props):
-    recorder = Recorder(**props)
-    recorder.apply = lambda scene: cls.apply(recorder, scene)
-    return cls.execute(recorder, bpy.context), recorder.reports
 
 
 def stored():
@@ -172,7 +107,7 @@ EDITS = [
 def test_edit_operator_and_function_store_cores_result_and_undo(addon, op, props, core,
                                                                 function):
     scene = bpy.context.scene
-    properties.store_coefficients(scene, KNOWN, computed=True)
+    scene_data.store(scene, KNOWN, WORLD)
     expected = core(KNOWN)
     assert np.abs(expected - KNOWN).max() > 1e-3  # the edit changes something
     bpy.ops.ed.undo_push(message="before edit")
@@ -210,7 +145,7 @@ def test_rotate_angles_are_yaw_pitch_roll_in_radians(addon):
     scene = bpy.context.scene
     from_x = np.repeat(sh_basis(np.array([1.0, 0.0, 0.0]))[:, None], 3, axis=1)
     from_y = np.repeat(sh_basis(np.array([0.0, 1.0, 0.0]))[:, None], 3, axis=1)
-    properties.store_coefficients(scene, from_x)
+    scene_data.store(scene, from_x, SCRIPT)
     bpy.ops.shlight.rotate(yaw=math.pi / 2)
     assert_allclose(stored(), from_y, atol=1e-7)  # π/2 as a float32 property
     rna = bpy.ops.shlight.rotate.get_rna_type().properties["yaw"]
@@ -234,11 +169,11 @@ def test_split_sun_is_disabled_without_a_world(addon):
 
 def test_describe_and_warning_are_cores(addon):
     scene = bpy.context.scene
-    properties.store_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
     assert design.describe(scene) == edits.describe_coefficients(KNOWN)
     assert design.negative_warning(scene) == negative_light_warning(KNOWN)
     assert design.negative_warning(scene) is not None
-    properties.store_coefficients(scene, windowing.minimal_nonnegative_window(KNOWN).coefficients)
+    scene_data.store(scene, windowing.minimal_nonnegative_window(KNOWN).coefficients, SCRIPT)
     assert design.negative_warning(scene) is None
 
 
@@ -268,7 +203,7 @@ def test_match_mapping_equals_computing_with_the_mapping(addon, tmp_path):
 def test_match_mapping_without_a_mapping_node_changes_nothing(addon, tmp_path):
     scene = bpy.context.scene
     environment_world(scene, write_exr(tmp_path / "w.exr", sky_map()))
-    properties.store_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
     with pytest.raises(RuntimeError, match="no Mapping node"):
         bpy.ops.shlight.rotate(mode="MAPPING")
     with pytest.raises(design.DesignError, match="no Mapping node"):
@@ -337,7 +272,7 @@ def plain_colour_world(scene):
 def test_window_cost_needs_an_image_world(addon):
     scene = bpy.context.scene
     plain_colour_world(scene)
-    properties.store_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
     result = design.apply_window(scene, "LANCZOS", 2.0)
     assert result.cost is None
     assert "not an equirectangular world image" in result.report()
@@ -390,7 +325,9 @@ def test_split_sun_creates_one_sun_light_and_the_rest_as_coefficients(addon, tmp
     # the coefficients: the world without the disc, as Blender shows it
     rest = rotate_coefficients(project_equirect(sky) * STRENGTH, lookup.T)
     assert_allclose(stored(), rest, rtol=0, atol=1e-5 * np.abs(rest).max())
-    assert scene_data.COMPUTED_PROPERTY not in scene  # not new Reset values
+    # the world without the sun is what Reset returns to (no sun in the coefficients again)
+    assert_allclose(scene_data.get_computed(scene), stored(), rtol=0, atol=1e-12)
+    assert scene_data.computed_provenance(scene)["sun"] == obj.name
 
     bpy.ops.ed.undo()
     assert not sun_objects()
@@ -408,7 +345,7 @@ def test_a_second_split_updates_the_same_light(addon, tmp_path):
     energy, matrix = obj.data.energy, np.array(obj.matrix_world)
     obj.data.energy = 1.0
     obj.rotation_euler = (0.0, 0.0, 0.0)
-    properties.store_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
 
     result, reports = run_execute(design_ui.SHLIGHT_OT_split_sun)
     assert result == {"FINISHED"}
@@ -417,15 +354,39 @@ def test_a_second_split_updates_the_same_light(addon, tmp_path):
     assert obj.data.energy == pytest.approx(energy, rel=FLOAT32)
     bpy.context.view_layer.update()
     assert_allclose(np.array(obj.matrix_world), matrix, atol=1e-6)
-    assert_array_equal(stored(), first.coefficients)
+    assert_array_equal(stored(), KNOWN)  # split already: the values set since are kept
+    assert_array_equal(scene_data.get_computed(scene), first.coefficients)
     [(kind, message)] = reports
     assert kind == {"INFO"} and f"'{obj.name}' updated" in message
+
+
+def test_split_sun_keeps_earlier_edits_and_reset_gives_no_second_sun(addon, tmp_path):
+    scene = bpy.context.scene
+    sky = sky_map()
+    pixels, _disc = sunny_map(sky)
+    environment_world(scene, write_exr(tmp_path / "sun.exr", pixels), STRENGTH)
+    computed, _info = compute.compute_and_store(scene)
+    rest = project_equirect(sky) * STRENGTH  # the world without its sun
+    sun = computed - rest
+    assert sun[0].max() > rest[0].max()  # the sun holds most of the light
+    design.exposure(scene, 1.0)  # an edit before the split
+    design.split_sun(scene)
+    [obj] = sun_objects()
+    tolerance = 1e-5 * np.abs(computed).max()
+    assert_allclose(stored(), 2.0 * computed - sun, rtol=0, atol=tolerance)  # edit kept
+    assert scene_data.provenance(scene)["edit"] == "split_sun"
+    assert bpy.ops.shlight.reset() == {"FINISHED"}
+    assert_allclose(stored(), rest, rtol=0, atol=tolerance)  # the sun is in the lamp only
+    assert scene_data.provenance(scene)["sun"] == obj.name
+    design.split_sun(scene)  # again: the light is updated, the sun not taken out twice
+    assert_allclose(stored(), rest, rtol=0, atol=tolerance)
+    assert len(sun_objects()) == 1
 
 
 def test_split_sun_on_a_world_without_a_sun_changes_nothing(addon, tmp_path):
     scene = bpy.context.scene
     environment_world(scene, write_exr(tmp_path / "sky.exr", sky_map()), STRENGTH)
-    properties.store_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
     objects = len(bpy.data.objects)
     result, reports = run_execute(design_ui.SHLIGHT_OT_split_sun)
     assert result == {"FINISHED"}
@@ -536,7 +497,7 @@ def test_previews_hold_cores_images_and_follow_edits(addon, monkeypatch):
         assert tuple(preview.image_size) == (previews.BASIS_SIZE, previews.BASIS_SIZE)
         assert_allclose(previews.from_preview(preview), image, rtol=0, atol=BYTE)
 
-    properties.store_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
     scene.view_settings.exposure = -1.0
     calls = []
     original = previews.irradiance_sphere_image
@@ -638,7 +599,7 @@ def test_design_panel_draws_previews_warning_words_and_buttons(addon, monkeypatc
     assert len(icons) == 9  # the basis only
     assert (design_ui.NO_COEFFICIENTS, "INFO") in [c[1:] for c in calls if c[0] == "label"]
 
-    properties.store_coefficients(scene, KNOWN)  # E < 0 behind its main light
+    scene_data.store(scene, KNOWN, SCRIPT)  # E < 0 behind its main light
     calls = draw(bpy.context)
     icons = [c for c in calls if c[0] == "icon"]
     assert [c[1] for c in icons[:9]] == list(range(101, 110))  # in order l(l+1) + m
@@ -670,6 +631,6 @@ def test_design_panel_draws_previews_warning_words_and_buttons(addon, monkeypatc
         for key in props:
             assert key in rna
 
-    properties.store_coefficients(scene, windowing.minimal_nonnegative_window(KNOWN).coefficients)
+    scene_data.store(scene, windowing.minimal_nonnegative_window(KNOWN).coefficients, SCRIPT)
     labels = [c for c in draw(bpy.context) if c[0] == "label"]
     assert not [c for c in labels if c[2] == "ERROR"]

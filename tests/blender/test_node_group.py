@@ -1,26 +1,24 @@
 """The "SH Irradiance" node group renders eq. 13 exactly, live, on a farm, and in EEVEE.
 
-Every pixel check renders colour and the Normal pass together into a multilayer EXR (read
-here by a small reader for uncompressed scanline EXR, since ``bpy.data.images`` cannot give
-the passes of a multilayer file) and compares each covered pixel with the core's
-``irradiance(coeffs, normal) / π`` at that pixel's normal.
+Pixel checks: ``blender_scenes.check_against_core`` (every covered pixel against the core's
+``irradiance(coeffs, normal) / π`` at that pixel's normal, from a multilayer EXR render).
 """
 
 import json
 import os
-import struct
 import subprocess
 import sys
 import textwrap
 import time
 from math import pi
-from pathlib import Path
 
 import bpy
 import numpy as np
 import pytest
 
 from benchmarks.render_bench import add_camera
+from blender_files import SCRIPT
+from blender_scenes import black_world, check_against_core, read_exr, render, setup_render, unpack
 from sh_lighting.blender import compat, materials, nodes, scene_data
 from sh_lighting.core import irradiance, project_equirect, reference_irradiance
 
@@ -41,113 +39,6 @@ COEFFS = np.array(
     ]
 )
 RELATIVE_TOLERANCE = 1e-4
-
-
-# ---------------------------------------------------------------- EXR reading
-
-
-def read_exr(path):
-    """{channel name: (H, W) float32, rows top to bottom} of an uncompressed scanline EXR.
-
-    Handles single- and multi-part files (Blender writes one part per pass), half and float
-    channels. Blender is asked for ``exr_codec = 'NONE'`` so no decompression is needed.
-    """
-    data = Path(path).read_bytes()
-    assert data[:4] == b"\x76\x2f\x31\x01", f"{path} is not an OpenEXR file"
-    flags = struct.unpack_from("<I", data, 4)[0]
-    multipart = bool(flags & 0x1000)
-    assert not flags & 0x200, "tiled EXR not supported"
-    pos, headers = 8, []
-    while True:
-        header = {}
-        while data[pos] != 0:
-            end = data.index(b"\0", pos)
-            name = data[pos:end].decode()
-            end2 = data.index(b"\0", end + 1)
-            size = struct.unpack_from("<i", data, end2 + 1)[0]
-            header[name] = data[end2 + 5 : end2 + 5 + size]
-            pos = end2 + 5 + size
-        pos += 1
-        headers.append(header)
-        if not multipart or data[pos] == 0:
-            pos += 1 if multipart else 0
-            break
-    parts = []
-    for header in headers:
-        assert header["compression"][0] == 0, "only uncompressed EXR is read here"
-        raw, p, channels = header["channels"], 0, []
-        while raw[p] != 0:
-            end = raw.index(b"\0", p)
-            channels.append((raw[p:end].decode(), struct.unpack_from("<i", raw, end + 1)[0]))
-            p = end + 17
-        x0, y0, x1, y1 = struct.unpack("<4i", header["dataWindow"])
-        parts.append((channels, x1 - x0 + 1, y1 - y0 + 1, y0))
-    out, tables = {}, []
-    for channels, width, height, _ in parts:
-        out.update({name: np.zeros((height, width), np.float32) for name, _ in channels})
-        tables.append(struct.unpack_from(f"<{height}Q", data, pos))
-        pos += 8 * height
-    for (channels, width, _, y0), offsets in zip(parts, tables):
-        for offset in offsets:
-            p = offset + (4 if multipart else 0)
-            y, _size = struct.unpack_from("<ii", data, p)
-            p += 8
-            for name, pixel_type in channels:
-                row = np.frombuffer(data, {1: "<f2", 2: "<f4"}[pixel_type], width, p)
-                out[name][y - y0] = row
-                p += row.nbytes
-    return out
-
-
-# ---------------------------------------------------------------- scene helpers
-
-
-def black_world(scene):
-    world = bpy.data.worlds.new("Black")
-    background = compat.ensure_node_tree(world).nodes["Background"]
-    background.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    background.inputs["Strength"].default_value = 0.0
-    scene.world = world
-
-
-def setup_render(scene, size=64, engine="CYCLES", samples=1):
-    """Exact-pixel settings: tiny filter, no denoising/dithering, Standard view, float EXR."""
-    scene.render.engine = engine
-    scene.render.resolution_x = scene.render.resolution_y = size
-    scene.render.resolution_percentage = 100
-    scene.render.dither_intensity = 0.0
-    scene.render.film_transparent = True
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    scene.view_settings.exposure = 0.0
-    scene.view_settings.gamma = 1.0
-    scene.cycles.samples = samples
-    scene.cycles.use_adaptive_sampling = False
-    scene.cycles.use_denoising = False
-    scene.cycles.filter_width = 0.01
-    scene.cycles.device = "CPU"
-    settings = scene.render.image_settings
-    if hasattr(settings, "media_type"):  # 5.0: multilayer is a media type
-        settings.media_type = "MULTI_LAYER_IMAGE"
-    settings.file_format = "OPEN_EXR_MULTILAYER"
-    settings.color_depth = "32"
-    settings.exr_codec = "NONE"
-    scene.view_layers[0].use_pass_normal = True
-
-
-def render(scene, path):
-    """Render the current frame to ``path``; (rgb, alpha, unit normal), rows top to bottom."""
-    scene.render.filepath = str(path)
-    bpy.ops.render.render(write_still=True)
-    return unpack(read_exr(path), scene.view_layers[0].name)
-
-
-def unpack(channels, layer="ViewLayer"):
-    rgb = np.stack([channels[f"{layer}.Combined.{c}"] for c in "RGB"], axis=-1)
-    alpha = channels[f"{layer}.Combined.A"]
-    normal = np.stack([channels[f"{layer}.Normal.{c}"] for c in "XYZ"], axis=-1).astype(float)
-    length = np.linalg.norm(normal, axis=-1, keepdims=True)
-    return rgb, alpha, normal / np.where(length > 0, length, 1.0)
 
 
 def add_object(kind, material):
@@ -171,43 +62,25 @@ def sh_scene(kind="sphere", size=64, engine="CYCLES", coeffs=COEFFS):
     add_object(kind, material)
     result = materials.apply_to_materials([material], scene)
     assert result.changed == [material.name] and not result.skipped, result
-    scene_data.set_coefficients(scene, coeffs)
+    scene_data.store(scene, coeffs, SCRIPT)
     add_camera(scene, (3.0, -4.0, 2.5))
     black_world(scene)
     setup_render(scene, size, engine)
     return scene
 
 
-def check_against_core(
-    rgb, alpha, normal, coeffs, what, tolerance=RELATIVE_TOLERANCE, albedo=(1.0, 1.0, 1.0)
-):
-    """Every covered pixel = albedo irradiance(coeffs, normal) / π; returns the max error."""
-    covered = alpha > 0.999
-    assert covered.sum() > 0.25 * alpha.size, f"{what}: object covers too few pixels"
-    predicted = np.asarray(albedo) * irradiance(coeffs, normal[covered]) / pi
-    low, high = predicted.min(axis=0), predicted.max(axis=0)
-    assert (low > 0.05 * high).all(), f"{what}: test lighting should stay well above 0"
-    relative = np.abs(rgb[covered] - predicted) / np.abs(predicted)
-    worst = float(relative.max())
-    print(f"\n{what}: {covered.sum()} pixels, max relative error {worst:.3g}")
-    assert worst < tolerance, (
-        f"{what}: max relative error {worst:.3g} over {covered.sum()} pixels "
-        f"(mean {relative.mean():.3g}) exceeds {tolerance}"
-    )
-    return worst
-
-
 # ---------------------------------------------------------------- the group itself
 
 
 def test_group_is_native_reused_and_complete():
-    scene = bpy.context.scene
-    group = nodes.ensure_node_group(scene)
+    group = nodes.ensure_node_group()
     assert group.bl_idname == "ShaderNodeTree" and group.name == "SH Irradiance"
     kinds = {node.bl_idname for node in group.nodes}
     assert not kinds & {"ShaderNodeScript"}, "no OSL: must run in EEVEE and on GPUs"
     attributes = [n for n in group.nodes if n.bl_idname == "ShaderNodeAttribute"]
-    assert sorted(a.attribute_name for a in attributes) == sorted(scene_data.PROPERTY_NAMES)
+    assert sorted(a.attribute_name for a in attributes) == sorted(
+        scene_data.PROPERTY_NAMES + scene_data.GAIN_NAMES
+    )
     assert {a.attribute_type for a in attributes} == {"VIEW_LAYER"}
     sockets = [(s.name, s.in_out, s.socket_type) for s in group.interface.items_tree]
     assert sockets == [
@@ -219,10 +92,10 @@ def test_group_is_native_reused_and_complete():
     ]
     count = len(group.nodes)
     group.nodes.remove(attributes[0])  # a hand edit is repaired, nothing duplicated
-    again = nodes.ensure_node_group(bpy.context.scene)
+    again = nodes.ensure_node_group()
     assert again == group and len(bpy.data.node_groups) == 1 and len(again.nodes) == count
     group.name = "Renamed"  # found by its marker, not its name
-    assert nodes.ensure_node_group(scene) == group and len(bpy.data.node_groups) == 1
+    assert nodes.ensure_node_group() == group and len(bpy.data.node_groups) == 1
 
 
 # ---------------------------------------------------------------- (a) (b) pixel checks
@@ -418,7 +291,7 @@ def test_apply_and_remove_restore_exactly():
 
     textured = made["textured"].node_tree
     (node,) = materials.added_nodes(made["textured"])
-    assert node.node_tree == nodes.ensure_node_group(scene)
+    assert node.node_tree == nodes.ensure_node_group()
     assert node.inputs["Albedo"].links[0].from_node.bl_idname == "ShaderNodeTexChecker"
     assert node.inputs["Normal"].links[0].from_node.bl_idname == "ShaderNodeBump"
     surface = textured.nodes["Material Output"].inputs["Surface"]
@@ -455,7 +328,7 @@ def test_failed_apply_is_rolled_back(monkeypatch):
     made = make_test_materials()
     before = {key: (link_set(m), node_set(m)) for key, m in made.items()}
     wrong = bpy.data.node_groups.new("Not a shader group", "GeometryNodeTree")
-    monkeypatch.setattr(materials, "ensure_node_group", lambda scene: wrong)
+    monkeypatch.setattr(materials, "ensure_node_group", lambda: wrong)
     changed, skipped = materials.apply_to_materials(made.values(), bpy.context.scene)
     assert changed == []
     reasons = dict(skipped)
@@ -513,7 +386,7 @@ def test_sh_render_vs_path_traced_hdri(tmp_path, hdri_dir):
     ].default_value = (1.0, 1.0, 1.0, 1.0)
     assert materials.apply_to_materials([sh_material], scene).changed == ["SH"]
     sphere.data.materials[0] = sh_material
-    scene_data.set_coefficients(scene, coeffs)
+    scene_data.store(scene, coeffs, SCRIPT)
     scene.cycles.samples = 1
     sh, alpha_sh, normal_sh = render(scene, tmp_path / "sh.exr")
 

@@ -11,7 +11,7 @@ from quadrature import random_directions
 from test_stability import NODE_GROUP_ORDER, NODE_ORDERS, eval_node_chain
 
 from sh_lighting.blender import nodes
-from sh_lighting.blender.scene_data import PROPERTY_NAMES
+from sh_lighting.blender.scene_data import GAIN_NAMES, PROPERTY_NAMES
 
 pytestmark = pytest.mark.blender
 
@@ -72,28 +72,34 @@ def vector(value):
     return value[..., None] if value.ndim == 1 else value
 
 
-@pytest.mark.parametrize("scalar", [False, True])
-def test_group_tree_is_the_float32_model_bit_for_bit(scalar):
+def group_irradiance(tree, normals, coeffs, gains):
+    attributes = {
+        name: np.broadcast_to(coeffs[i], (len(normals), 3)) for i, name in enumerate(PROPERTY_NAMES)
+    }
+    attributes.update({name: F32(gains[i]) for i, name in enumerate(GAIN_NAMES)})
+    (output,) = [n for n in tree.nodes if n.bl_idname == "NodeGroupOutput"]
+    return TreeEvaluator(tree, normals, attributes).input(output.inputs["Irradiance"])
+
+
+def test_group_tree_is_the_float32_model_bit_for_bit():
     rng = np.random.default_rng(7)
     normals = random_directions(500, seed=8).astype(F32)
     scale = np.array([1.0, 0.3, 0.3, 0.3, 0.1, 0.1, 0.1, 0.1, 0.1])[:, None]
     coeffs = (rng.normal(size=(9, 3)) * scale).astype(F32)
-    if scalar:
-        coeffs[:] = coeffs[:, :1]
-    spec = nodes.GroupSpec(nodes.FULL_SPEC.terms, scalar=scalar)
-    tree = nodes.build_node_group(spec)
+    tree = nodes.build_node_group()
     read = {n.attribute_name for n in tree.nodes if n.bl_idname == "ShaderNodeAttribute"}
-    assert read == set(PROPERTY_NAMES)
-    attributes = {
-        name: coeffs[i, 0] if scalar else np.broadcast_to(coeffs[i], (len(normals), 3))
-        for i, name in enumerate(PROPERTY_NAMES)
-    }
-    (output,) = [n for n in tree.nodes if n.bl_idname == "NodeGroupOutput"]
-    got = TreeEvaluator(tree, normals, attributes).input(output.inputs["Irradiance"])
-    got = np.broadcast_to(got[..., None] if scalar else got, (len(normals), 3))
+    assert read == set(PROPERTY_NAMES) | set(GAIN_NAMES)
+    got = group_irradiance(tree, normals, coeffs, np.ones(9))  # gains 1: nothing rounds more
     for channel in range(3):
         model = eval_node_chain(coeffs[:, channel], normals, NODE_ORDERS[NODE_GROUP_ORDER])
         assert got.dtype == F32 and np.array_equal(got[:, channel], model), channel
         other = eval_node_chain(coeffs[:, channel], normals, NODE_ORDERS["L00 first, index order"])
         assert not np.array_equal(got[:, channel], other)  # the order is visible in the bits
+    gains = rng.uniform(-2.0, 3.0, 9)
+    scaled = group_irradiance(tree, normals, coeffs, gains)
+    for channel in range(3):
+        model = eval_node_chain(
+            (coeffs[:, channel] * gains).astype(F32), normals, NODE_ORDERS[NODE_GROUP_ORDER]
+        )
+        assert np.abs(scaled[:, channel] - model).max() < 1e-5 * np.abs(coeffs).max()
     bpy.data.node_groups.remove(tree)

@@ -10,7 +10,8 @@ import os
 import bpy
 import numpy as np
 import pytest
-from blender_files import write_constant_exr
+from blender_files import SCRIPT, WORLD, write_constant_exr
+from blender_scenes import run_execute
 from numpy.testing import assert_allclose
 
 from sh_lighting import api
@@ -44,21 +45,6 @@ def expected_constant(rgb=COLOUR, strength=STRENGTH):
     expected = np.zeros((9, 3))
     expected[0] = 2.0 * math.sqrt(math.pi) * np.asarray(rgb) * strength
     return expected
-
-
-class Recorder:
-    """Stands in for the operator instance when calling ``execute`` directly: keeps reports."""
-
-    def __init__(self):
-        self.reports = []
-
-    def report(self, kind, message):
-        self.reports.append((set(kind), message))
-
-
-def run_execute(cls):
-    recorder = Recorder()
-    return cls.execute(recorder, bpy.context), recorder.reports
 
 
 # --- Compute from World ---------------------------------------------------------------------
@@ -103,15 +89,45 @@ def test_capture_width_comes_from_the_scene_override(addon, monkeypatch):
 
     monkeypatch.setattr(world, "world_coefficients", fake_world_coefficients)
     scene = bpy.context.scene
+    scene.world = bpy.data.worlds.new("Procedural")
     assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
     scene.sh_lighting.use_capture_width = True
     scene.sh_lighting.capture_width = 64
     assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
     api.compute_from_world(scene)
     api.compute_from_world(scene, capture_width=32)
+    scene.sh_lighting.capture_width = 65  # accepted by the field: rounded up, not a failure
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
     # 256: no add-on preferences when registered by the test fixture rather than enabled.
-    assert widths == [properties.DEFAULT_CAPTURE_WIDTH, 64, 64, 32]
+    assert widths == [properties.DEFAULT_CAPTURE_WIDTH, 64, 64, 32, 66]
     assert_allclose(api.get_computed(scene), KNOWN)
+    assert api.get_provenance(scene) == {
+        "source": "WORLD", "world": "fake", "method": "CAPTURE", "capture_width": 66
+    }
+
+
+def test_odd_capture_width_renders_a_capture(addon):
+    """End to end: an odd width in the field gives a capture (of the next even width)."""
+    scene = bpy.context.scene
+    world_id = bpy.data.worlds.new("Plain")
+    world_id.color = (0.25, 0.5, 0.75)
+    compat.ensure_node_tree(world_id).nodes["Background"].inputs["Color"].default_value = (
+        0.25, 0.5, 0.75, 1.0
+    )
+    scene.world = world_id
+    scene.sh_lighting.use_capture_width = True
+    scene.sh_lighting.capture_width = 17
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+    assert api.get_provenance(scene)["capture_width"] == 18
+    assert_allclose(api.get_coefficients(scene)[0], expected_constant((0.25, 0.5, 0.75), 1.0)[0],
+                    rtol=2e-3)
+
+
+def test_compute_is_disabled_without_a_world(addon):
+    bpy.context.scene.world = None
+    assert not bpy.ops.shlight.compute_from_world.poll()
+    with pytest.raises(RuntimeError, match="The scene has no world: add one"):
+        bpy.ops.shlight.compute_from_world()
 
 
 def test_compute_api_on_constant_exr_world(addon, tmp_path):
@@ -186,7 +202,7 @@ def scene_state(scene):
 def test_world_errors_cancel_and_change_nothing(addon, tmp_path, make_broken_world, says):
     scene = bpy.context.scene
     make_broken_world(scene, tmp_path)
-    properties.store_coefficients(scene, KNOWN, computed=True)
+    scene_data.store(scene, KNOWN, WORLD)
     before = scene_state(scene)
 
     result, reports = run_execute(operators.SHLIGHT_OT_compute_from_world)
@@ -197,7 +213,8 @@ def test_world_errors_cancel_and_change_nothing(addon, tmp_path, make_broken_wor
 
     with pytest.raises(RuntimeError) as raised:  # how bpy.ops surfaces an ERROR report
         bpy.ops.shlight.compute_from_world()
-    assert message in str(raised.value)
+    # without a world the button is disabled (poll) with its own reason
+    assert (message if scene.world else "The scene has no world") in str(raised.value)
     assert scene_state(scene) == before
 
     with pytest.raises(WorldError) as raised:
@@ -211,52 +228,32 @@ def test_world_errors_cancel_and_change_nothing(addon, tmp_path, make_broken_wor
 # --- Editing: rows, channels, reset, keyframes ----------------------------------------------
 
 
-def test_row_value_is_channel_mean_and_rescales_the_triple(addon):
+def test_gain_scales_the_row_and_is_keyframable(addon):
     scene = bpy.context.scene
-    settings = scene.sh_lighting
-    coeffs = KNOWN.copy()
-    coeffs[2] = (1.0, 2.0, 3.0)
-    coeffs[3] = (0.0, 0.0, 0.0)
-    coeffs[4] = (1.0, -1.0, 0.0)
-    properties.store_coefficients(scene, coeffs)
-    assert settings.row_L10 == pytest.approx(2.0)
-
-    settings.row_L10 = 4.0  # doubles the triple, keeps its colour
-    assert list(scene["sh_L10"]) == pytest.approx([2.0, 4.0, 6.0])
-    settings.row_L10 = -1.0  # signed: flips the triple
-    assert list(scene["sh_L10"]) == pytest.approx([-0.5, -1.0, -1.5])
-    assert settings.row_L10 == pytest.approx(-1.0)
-    settings.row_L11 = 0.25  # all zero: becomes grey
-    assert list(scene["sh_L11"]) == pytest.approx([0.25, 0.25, 0.25])
-    settings.row_L2m2 = 0.5  # mean zero, cannot rescale: shifted
-    assert list(scene["sh_L2m2"]) == pytest.approx([1.5, -0.5, 0.5])
-    settings.row_L00 = 100.0  # beyond the soft limit: HDR values are not clamped
-    assert settings.row_L00 == pytest.approx(100.0)
-
-    coeffs = scene_data.get_coefficients(scene)
-    assert_allclose(coeffs[0], KNOWN[0] * (100.0 / KNOWN[0].mean()))
-    untouched = [1, 5, 6, 7, 8]
-    assert_allclose(coeffs[untouched], KNOWN[untouched])
-
-
-def test_row_on_a_scene_without_coefficients_creates_them(addon):
-    scene = bpy.context.scene
-    assert scene.sh_lighting.row_L20 == 0.0
-    scene.sh_lighting.row_L20 = -0.3
-    expected = np.zeros((9, 3))
-    expected[6] = -0.3
-    assert_allclose(scene_data.get_coefficients(scene), expected)
-    assert scene.id_properties_ui("sh_L20").as_dict()["soft_min"] == -properties.SOFT_LIMIT
+    scene_data.store(scene, KNOWN, SCRIPT)
+    scene["sh_L10_gain"] = 2.5  # what the panel's Gain field of L10 writes
+    expected = KNOWN.copy()
+    expected[2] *= 2.5
+    assert_allclose(api.get_coefficients(scene), expected)
+    assert list(scene["sh_L10"]) == pytest.approx(KNOWN[2])  # the channels are unchanged
+    assert scene.keyframe_insert('["sh_L10_gain"]', frame=1)
+    scene["sh_L10_gain"] = -1.0  # signed
+    assert scene.keyframe_insert('["sh_L10_gain"]', frame=11)
+    scene.frame_set(1)
+    assert_allclose(api.get_coefficients(scene), expected)
+    scene.frame_set(11)
+    assert api.get_coefficients(scene)[2] == pytest.approx(-KNOWN[2])
+    api.set_coefficients(scene, KNOWN * 2.0)  # a write stores c = values, s = 1
+    assert scene["sh_L10_gain"] == 1.0 and list(scene["sh_L10"]) == pytest.approx(2 * KNOWN[2])
 
 
 def test_per_channel_edit_and_reset(addon):
     scene = bpy.context.scene
-    properties.store_coefficients(scene, KNOWN, computed=True)
+    scene_data.store(scene, KNOWN, WORLD)
     scene["sh_L10"][1] = -7.5  # what the panel's G field of L10 writes
     edited = KNOWN.copy()
     edited[2, 1] = -7.5
     assert_allclose(api.get_coefficients(scene), edited)
-    assert scene.sh_lighting.row_L10 == pytest.approx(edited[2].mean())
 
     api.set_coefficients(scene, KNOWN * 3.0)
     assert bpy.ops.shlight.reset() == {"FINISHED"}
@@ -265,7 +262,7 @@ def test_per_channel_edit_and_reset(addon):
 
 
 def test_reset_is_disabled_with_a_reason_before_any_compute(addon):
-    properties.store_coefficients(bpy.context.scene, KNOWN)
+    scene_data.store(bpy.context.scene, KNOWN, SCRIPT)
     assert not bpy.ops.shlight.reset.poll()
     with pytest.raises(RuntimeError, match="Nothing to reset to: run Compute from World first"):
         bpy.ops.shlight.reset()
@@ -275,7 +272,7 @@ def test_reset_is_disabled_with_a_reason_before_any_compute(addon):
 
 def test_coefficients_can_be_keyframed(addon):
     scene = bpy.context.scene
-    properties.store_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
     assert scene.keyframe_insert('["sh_L10"]', frame=1)
     scene["sh_L10"] = [5.0, -5.0, 9.0]
     assert scene.keyframe_insert('["sh_L10"]', frame=11)
@@ -321,7 +318,7 @@ def two_objects_with_materials():
 def test_apply_and_remove_selected_then_all(addon):
     scene = bpy.context.scene
     (lit, lit_mat), (other, other_mat) = two_objects_with_materials()
-    properties.store_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
 
     result, reports = run_execute(operators.SHLIGHT_OT_apply)
     assert result == {"FINISHED"}
@@ -350,10 +347,33 @@ def test_apply_api_matches_operator(addon):
     api.set_coefficients(scene, KNOWN)
     changed, skipped = api.apply_to_materials([lit_mat, other_mat, lit_mat])
     assert changed == [lit_mat.name_full, other_mat.name_full] and skipped == []
-    assert api.ensure_node_group(scene).name == "SH Irradiance"
+    assert api.ensure_node_group().name == "SH Irradiance"
     changed, skipped = api.remove_from_materials([other_mat])
     assert changed == [other_mat.name_full]
     assert materials.is_applied(lit_mat) and not materials.is_applied(other_mat)
+
+
+def test_apply_reports_objects_without_a_material(addon):
+    scene = bpy.context.scene
+    (lit, lit_mat), _other = two_objects_with_materials()
+    bare = bpy.data.objects.new("Bare", bpy.data.meshes.new("Bare"))
+    scene.collection.objects.link(bare)
+    empty_slot = bpy.data.objects.new("Empty Slot", bpy.data.meshes.new("Empty Slot"))
+    empty_slot.data.materials.append(None)
+    scene.collection.objects.link(empty_slot)
+    scene.collection.objects.link(bpy.data.objects.new("Axes", None))  # no material possible
+    scene_data.store(scene, KNOWN, SCRIPT)
+    lit.select_set(False)
+    bare.select_set(True)
+    result, reports = run_execute(operators.SHLIGHT_OT_apply)
+    assert result == {"CANCELLED"}
+    assert reports == [({"WARNING"}, "SH lighting applied to no material: 1 object(s) have no "
+                        "material (Bare): give them a material first")]
+    scene.sh_lighting.apply_target = "ALL"
+    result, reports = run_execute(operators.SHLIGHT_OT_apply)
+    assert result == {"FINISHED"}
+    assert reports == [({"INFO"}, "SH lighting applied to 2 material(s), 0 skipped; 2 object(s) "
+                        "have no material (Bare, Empty Slot): give them a material first")]
 
 
 def test_apply_polls_explain_why_disabled(addon):
@@ -361,7 +381,7 @@ def test_apply_polls_explain_why_disabled(addon):
     two_objects_with_materials()
     with pytest.raises(RuntimeError, match="No SH coefficients yet"):
         bpy.ops.shlight.apply()
-    properties.store_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
     for obj in scene.objects:
         obj.select_set(False)
     with pytest.raises(RuntimeError, match="No objects selected"):

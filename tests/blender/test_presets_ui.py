@@ -16,10 +16,10 @@ from types import SimpleNamespace
 import bpy
 import numpy as np
 import pytest
-from blender_files import write_constant_exr
+from blender_files import SCRIPT, WORLD, write_constant_exr
 from numpy.testing import assert_allclose, assert_array_equal
 
-from sh_lighting.blender import preset_io, presets_ui, scene_data
+from sh_lighting.blender import compat, preset_io, presets_ui, scene_data
 from sh_lighting.core import atomic, interop
 from sh_lighting.core.presets import PresetError, read_preset, write_preset
 from tools import package
@@ -60,7 +60,7 @@ def leftovers(folder):
 @pytest.fixture
 def scene(addon):
     scene = bpy.context.scene
-    scene_data.set_coefficients(scene, KNOWN)
+    scene_data.store(scene, KNOWN, SCRIPT)
     return scene
 
 
@@ -104,7 +104,7 @@ def test_formats_differ_as_documented(scene, tmp_path):
 
 def test_import_operator_round_trip_with_undo(scene, tmp_path):
     path = preset_io.export_preset(scene, tmp_path / "known.json")
-    scene_data.set_coefficients(scene, OTHER)
+    scene_data.store(scene, OTHER, SCRIPT)
     bpy.ops.ed.undo_push(message="before import")
     assert bpy.ops.shlight.import_preset("EXEC_DEFAULT", True, filepath=str(path)) == {
         "FINISHED"
@@ -121,13 +121,13 @@ def test_preset_io_round_trip_and_metadata(scene, tmp_path):
     assert metadata["name"] == "mine" and metadata["notes"] == "hi"
     assert metadata["created"] == date.today().isoformat()
     assert "source" not in metadata  # the scene's values were not computed from its world
-    scene_data.set_coefficients(scene, OTHER)
+    scene_data.store(scene, OTHER, SCRIPT)
     assert_array_equal(preset_io.import_preset(scene, path), KNOWN)
     assert_array_equal(scene_data.get_coefficients(scene), KNOWN)
 
 
 def test_import_keeps_the_reset_values(scene, tmp_path):
-    scene_data.set_coefficients(scene, OTHER, computed=True)
+    scene_data.store(scene, OTHER, WORLD)
     path = write_preset(tmp_path / "p.json", KNOWN)
     preset_io.import_preset(scene, path)
     assert_array_equal(scene_data.get_coefficients(scene), KNOWN)
@@ -155,7 +155,7 @@ def test_metadata_names_the_world_image_while_the_values_are_the_computed_ones(a
 
     coeffs = scene_data.get_coefficients(scene)
     coeffs[0, 0] += 0.25  # an edit: the image is no longer the whole story
-    scene_data.set_coefficients(scene, coeffs)
+    scene_data.store(scene, coeffs, SCRIPT)
     metadata = read_preset(preset_io.export_preset(scene, tmp_path / "b.json"))[1]
     assert "source" not in metadata and "strength" not in metadata
 
@@ -241,7 +241,7 @@ MALFORMED = {
 @pytest.mark.parametrize("case", [*MALFORMED, "binary", "folder", "missing"])
 @pytest.mark.parametrize("operator", ["import_preset", "load_preset"])
 def test_malformed_preset_is_an_error_and_changes_nothing(scene, tmp_path, case, operator):
-    scene_data.set_coefficients(scene, KNOWN, computed=True)
+    scene_data.store(scene, KNOWN, WORLD)
     path = tmp_path / f"{case}.json"
     if case in MALFORMED:
         path.write_text(MALFORMED[case])
@@ -268,7 +268,40 @@ def test_shipped_presets_are_listed_and_load(scene):
     path = shipped["forest"]
     assert bpy.ops.shlight.load_preset(filepath=str(path)) == {"FINISHED"}
     assert_array_equal(scene_data.get_coefficients(scene), read_preset(path)[0])
-    assert presets_ui.SHLIGHT_MT_presets.bl_label == "Forest"  # shipped names are title-cased
+    assert presets_ui.menu_label(scene) == "Forest"  # shipped names are title-cased
+    assert scene_data.provenance(scene)["source"] == "PRESET"
+
+
+def test_preset_menu_label_belongs_to_the_scene_and_its_values(scene, user_dir, tmp_path):
+    forest = preset_io.shipped_presets()["forest"]
+    assert presets_ui.menu_label(scene) == "Presets"
+    assert bpy.ops.shlight.load_preset(filepath=str(forest)) == {"FINISHED"}
+    assert presets_ui.menu_label(scene) == "Forest"
+    other = bpy.data.scenes.new("New scene")  # a new scene has loaded no preset
+    assert presets_ui.menu_label(other) == "Presets"
+    assert presets_ui.menu_label(scene) == "Forest"
+    bpy.ops.shlight.exposure(stops=1.0)  # a design edit: the values are no longer the preset
+    assert presets_ui.menu_label(scene) == "Presets"
+    user_dir.mkdir(parents=True)
+    mine = write_preset(user_dir / "mine.json", KNOWN)
+    assert bpy.ops.shlight.load_preset(filepath=str(mine)) == {"FINISHED"}
+    assert presets_ui.menu_label(scene) == "mine"
+    assert bpy.ops.shlight.preset_remove(name="mine") == {"FINISHED"}
+    assert presets_ui.menu_label(scene) == "Presets"  # a deleted preset is not shown
+    scene.world = bpy.data.worlds.new("Lit")
+    compat.ensure_node_tree(scene.world).nodes["Background"].inputs["Color"].default_value = (
+        1.0, 1.0, 1.0, 1.0
+    )
+    assert bpy.ops.shlight.load_preset(filepath=str(forest)) == {"FINISHED"}
+    tmp_path.joinpath("c").mkdir()
+    image = write_constant_exr(tmp_path / "c" / "white.exr", (1.0, 1.0, 1.0))
+    env = scene.world.node_tree.nodes.new("ShaderNodeTexEnvironment")
+    env.image = bpy.data.images.load(image)
+    scene.world.node_tree.links.new(
+        env.outputs["Color"], scene.world.node_tree.nodes["Background"].inputs["Color"]
+    )
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+    assert presets_ui.menu_label(scene) == "Presets"  # Compute replaced the preset's values
 
 
 def test_package_ships_the_presets_where_preset_io_looks(tmp_path, monkeypatch):
@@ -288,7 +321,7 @@ def test_user_presets_add_list_and_remove(scene, user_dir):
     assert metadata["name"] == "My warm / studio!"
     assert preset_io.user_presets() == {"My_warm_studio": path}
 
-    scene_data.set_coefficients(scene, OTHER)
+    scene_data.store(scene, OTHER, SCRIPT)
     with pytest.raises(RuntimeError, match="already exists"):
         bpy.ops.shlight.preset_add(name="My warm / studio!")
     assert_array_equal(read_preset(path)[0], KNOWN)
@@ -308,7 +341,7 @@ def test_a_preset_dropped_in_by_hand_keeps_its_name_and_can_be_removed(scene, us
     path = write_preset(user_dir / "Sky blue.json", KNOWN)
     assert preset_io.user_presets() == {"Sky blue": path}
     assert bpy.ops.shlight.load_preset(filepath=str(path)) == {"FINISHED"}
-    assert presets_ui.SHLIGHT_MT_presets.bl_label == "Sky blue"  # user names keep their case
+    assert presets_ui.menu_label(scene) == "Sky blue"  # user names keep their case
     assert preset_io.remove_user_preset("Sky blue") == path
     assert not path.exists()
 

@@ -1,11 +1,14 @@
 """Registration: nothing left behind after many enable/disable cycles, and what the UI needs
-(undoable operators, described properties without a 0-1 clamp, panels that draw valid paths).
+(undoable operators, described properties without a 0-1 clamp, panels that draw valid paths),
+and everything gone again after unregister.
 """
 
 import bpy
 import pytest
+from blender_files import SCRIPT
 
-from sh_lighting.blender import nodes, operators, panels, properties, scene_data
+from sh_lighting import blender
+from sh_lighting.blender import operators, panels, scene_data
 from sh_lighting.core.sh import COEFFICIENT_NAMES
 
 CYCLES = 20
@@ -40,10 +43,22 @@ def test_enable_disable_many_times_leaves_nothing_behind():
     assert not any(name.startswith("SHLIGHT_") for name in dir(bpy.types))
 
 
-def test_every_class_registered_and_gone(addon):
-    for module in (properties, operators, panels):
-        for cls in module.classes:
-            assert cls.is_registered, cls.__name__
+def test_every_class_registered_and_gone():
+    import sh_lighting
+
+    classes = [cls for module in blender.MODULES for cls in module.classes]
+    assert len(classes) > 10
+    assert not any(cls.is_registered for cls in classes)
+    sh_lighting.register()
+    try:
+        assert [cls for cls in classes if not cls.is_registered] == []
+        assert hasattr(bpy.types.Scene, "sh_lighting")
+    finally:
+        sh_lighting.unregister()
+    assert [cls.__name__ for cls in classes if cls.is_registered] == []
+    assert not hasattr(bpy.types.Scene, "sh_lighting")
+    for cls in classes:
+        assert getattr(bpy.types, cls.__name__, None) is None, cls.__name__
 
 
 @pytest.mark.parametrize("cls", operators.classes, ids=lambda c: c.__name__)
@@ -54,32 +69,29 @@ def test_operators_are_undoable(addon, cls):
     assert "UNDO" in getattr(getattr(bpy.ops, idname[0]), idname[1]).bl_options
 
 
-def test_settings_properties_are_described_and_unclamped(addon):
+def test_settings_properties_are_described(addon):
     rna = bpy.types.Scene.bl_rna.properties["sh_lighting"].fixed_type
-    names = [p.identifier for p in rna.properties if p.identifier not in {"rna_type", "name"}]
-    assert len(names) == 9 + 3 + 2  # rows, 3 settings, fit tolerance and clamp mode
-    for prop in rna.properties:
-        if prop.identifier in {"rna_type", "name"}:
-            continue
-        assert prop.description, prop.identifier
-    for index in range(9):
-        row = rna.properties[properties.row_property_name(index)]
-        assert row.hard_min < -1e30 and row.hard_max > 1e30  # signed HDR: no clamp at all
-        assert row.soft_min == -properties.SOFT_LIMIT and row.soft_max == properties.SOFT_LIMIT
-        assert not row.is_animatable
-        assert row.name == COEFFICIENT_NAMES[index]
+    names = {p.identifier for p in rna.properties} - {"rna_type", "name"}
+    assert names == {"apply_target", "use_capture_width", "capture_width"}  # no coefficients
+    for name in names:
+        assert rna.properties[name].description, name
 
 
 def test_coefficient_custom_properties_get_ui_data(addon):
     scene = bpy.context.scene
-    properties.store_coefficients(scene, [[-3.0, 0.5, 40.0]] * 9)
+    scene_data.store(scene, [[-3.0, 0.5, 40.0]] * 9, SCRIPT)
     for index, name in enumerate(scene_data.PROPERTY_NAMES):
         ui = scene.id_properties_ui(name).as_dict()
         assert ui["subtype"] == "NONE"  # 3 number fields, no colour swatch
-        assert ui["min"] < -1e30 and ui["max"] > 1e30
-        assert ui["soft_min"] == -properties.SOFT_LIMIT
+        assert ui["min"] < -1e30 and ui["max"] > 1e30  # signed HDR: no hard limits
+        assert ui["soft_min"] == -80.0 and ui["soft_max"] == 80.0  # 2 × the largest value
         assert COEFFICIENT_NAMES[index] in ui["description"]
         assert list(scene[name]) == [-3.0, 0.5, 40.0]  # written as given, not clamped
+        gain = scene.id_properties_ui(scene_data.GAIN_NAMES[index]).as_dict()
+        assert scene[scene_data.GAIN_NAMES[index]] == 1.0 and gain["default"] == 1.0
+        assert "strength" in gain["description"] and gain["min"] < -1e30
+    scene_data.store(scene, [[0.01, 0.02, -0.03]] * 9, SCRIPT)  # the drag range follows
+    assert scene.id_properties_ui("sh_L10").as_dict()["soft_max"] == pytest.approx(0.06)
 
 
 class RecordingLayout:
@@ -122,37 +134,22 @@ def test_panels_draw_resolvable_properties_and_operators(addon):
     assert not [c for c in calls if c[0] == "prop"]  # no coefficients yet: a hint only
     assert any("Compute" in c[1] for c in calls if c[0] == "label")
 
-    properties.store_coefficients(scene, [[float(i), 1.0, 2.0] for i in range(9)])
+    scene_data.store(scene, [[float(i), 1.0, 2.0] for i in range(9)], SCRIPT)
     calls.clear()
     panels.draw_coefficients(RecordingLayout(calls), context)
     labels = [c[1] for c in calls if c[0] == "label"]
     assert labels[2] == "L10: light from above vs below"
     assert labels[3] == "L11: light from +X vs −X"
     props = [c for c in calls if c[0] == "prop"]
-    assert len(props) == 9 * 4  # row value + R, G, B
+    assert len(props) == 9 * 4  # gain + R, G, B
     for _, data, path, kwargs in props:
         value = data.path_resolve(path)  # the drawn path exists
         if "index" in kwargs:
             assert 0 <= kwargs["index"] < len(value)
     rgb = [(path, kwargs["index"]) for _, data, path, kwargs in props if "index" in kwargs]
     assert rgb[6:9] == [('["sh_L10"]', 0), ('["sh_L10"]', 1), ('["sh_L10"]', 2)]
-
-
-def test_node_group_panel_shows_the_refit_hint(addon):
-    scene = bpy.context.scene
-    calls = []
-    panels.draw_node_group(RecordingLayout(calls), bpy.context)
-    assert any("none yet" in c[1] for c in calls if c[0] == "label")
-    properties.store_coefficients(scene, [[1.0, 1.0, 1.0]] + [[0.0, 0.0, 0.0]] * 8)
-    nodes.ensure_node_group(scene)
-    scene["sh_L11"] = [0.2, 0.2, 0.2]  # a raw edit needing a term the group left out
-    hint = nodes.refit_hint(scene)
-    assert hint and "L11" in hint
-    calls.clear()
-    panels.draw_node_group(RecordingLayout(calls), bpy.context)
-    labels = [c[1] for c in calls if c[0] == "label"]
-    assert labels[0].startswith("Node group: ") and hint in labels
-    assert ("operator", "shlight.refit", {"icon": "FILE_REFRESH"}) in calls
+    gains = [path for _, data, path, kwargs in props if "index" not in kwargs]
+    assert gains == [f'["{name}"]' for name in scene_data.GAIN_NAMES]
 
 
 def test_panels_live_in_world_properties_and_sidebar(addon):
