@@ -404,8 +404,9 @@ def cmd_apply(args):
     blend = open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
     scene = pick_scene(args.scene)
     objects = objects_to_apply(scene, args.objects)
-    provenance = _module("blender.preset_io").preset_provenance(preset, {})
-    api.set_coefficients(scene, coeffs, provenance)
+    preset_io = _module("blender.preset_io")
+    provenance = preset_io.preset_provenance(preset, {})
+    api.set_coefficients(scene, preset_io.from_preset_space(coeffs), provenance)
     result = api.apply_to_materials(operators.materials_of(objects), scene)
     for name, reason in result.skipped:
         _print(f"skipped material '{name}': {reason}")

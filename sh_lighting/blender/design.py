@@ -19,6 +19,7 @@ import numpy as np
 from mathutils import Matrix
 
 from ..core import edits, windowing
+from ..core.colour import luminance_weights
 from ..core.minimum import irradiance_minimum, negative_light_warning
 from ..core.rotation import rotate_coefficients
 from ..core.sh import spread_normals
@@ -30,7 +31,7 @@ from ..core.world_map import (
     sun_light_rotation,
     to_world_direction,
 )
-from . import scene_data, world
+from . import compat, scene_data, world
 
 SUN_NAME = "SH Sun"
 SUN_MARKER = "sh_lighting_sun"  # custom property on the Sun object Split Sun made
@@ -78,7 +79,7 @@ def saturation(scene, amount, band=None):
         band = BANDS[band]
     elif isinstance(band, (int, np.integer)):
         band = (int(band),)
-    return _edit(scene, edits.saturation, amount, band)
+    return _edit(scene, edits.saturation, amount, band, luminance())
 
 
 def band_gains(scene, ambient=1.0, directional=1.0, quadratic=1.0):
@@ -93,7 +94,12 @@ def flip_vertical(scene):
 
 def describe(scene):
     """Nine short strings: what each coefficient does in the scene's lighting."""
-    return edits.describe_coefficients(scene_data.get_coefficients(scene))
+    return edits.describe_coefficients(scene_data.get_coefficients(scene), luminance())
+
+
+def luminance():
+    """The luminance weights of the file's working colour space (``core.colour``)."""
+    return luminance_weights(compat.working_space())
 
 
 def negative_warning(scene):
@@ -311,7 +317,7 @@ def split_sun(scene):
     if not image.strength > 0.0:
         return None  # a black (or negative) world has no sun to split off
     pixels = image.pixels()
-    sun = detect_sun(pixels)
+    sun = detect_sun(pixels, luminance=luminance())
     if sun is None:
         return None
     rest = map_coefficients(remove_sun(pixels, sun), image.strength, image.rotation)

@@ -277,7 +277,7 @@ def draw_lighting(layout, scene):
         for i, line in enumerate(textwrap.wrap(warning, WARNING_WIDTH)):
             box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
     col = layout.column(align=True)
-    for line in describe_coefficients(coeffs):  # design.describe
+    for line in describe_coefficients(coeffs, design.luminance()):  # design.describe
         col.label(text=line)
 
 

@@ -16,6 +16,10 @@ moved into place, ``core.atomic``) and never over an existing file unless ``over
 * ``"filament"``: cmgen ``sh.txt`` text, 9 lines of shader-ready (pre-scaled) values, glTF
   frame, no windowing.
 
+Every format holds linear Rec.709 RGB (``EXPORT_SPACE``): ``export_coefficients`` converts
+from the file's working colour space in one place (``to_export_space``), and importing
+converts a preset into it (``from_preset_space``).
+
 Importing reads our JSON format only; the coefficients become the scene's current values.
 They do **not** become the Reset values: Reset keeps meaning "the values last computed from
 the world" (its tooltip says so), and Undo returns to the values before the import.
@@ -44,9 +48,11 @@ import bpy
 import numpy as np
 
 from ..core import atomic
+from ..core.coefficients import check_coefficients
+from ..core.colour import REC709, convert_coefficients
 from ..core.interop import to_filament_sh_txt, to_gltf_irradiance_coefficients, to_threejs_sh
-from ..core.presets import preset_to_json, read_preset
-from . import scene_data
+from ..core.presets import PresetError, preset_to_json, read_preset
+from . import compat, scene_data
 from . import world as world_module
 
 # format id -> (label, file extension)
@@ -61,6 +67,9 @@ PRESET_EXTENSION = ".json"
 MAX_NAME_LENGTH = 64
 MAX_NAME_BYTES = 200  # of UTF-8: file systems allow 255 bytes per name, ".json" included
 GENERATOR = "sh_lighting"
+# Every format holds linear Rec.709 RGB (three.js's, glTF's and Filament's linear space; our
+# presets too, so a preset means the same light in a file of any working space).
+EXPORT_SPACE = REC709
 OVERWRITE_HINT = "enable Overwrite (overwrite=True) to replace it"
 
 _PACKAGE_DIR = Path(__file__).resolve().parent.parent
@@ -207,8 +216,22 @@ def export_text(coeffs, format="sh_lighting", metadata=None):
     return json.dumps(d, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
 
 
+def to_export_space(coeffs, error=ValueError):
+    """``coeffs`` (9, 3) of the file's working colour space in ``EXPORT_SPACE``, the space
+    of every format written (``core.colour.convert_coefficients``); checked first (``error``
+    names the problem)."""
+    checked = check_coefficients(coeffs, error=error)
+    return convert_coefficients(checked, compat.working_space(), EXPORT_SPACE)
+
+
+def from_preset_space(coeffs):
+    """Coefficients read from a preset (``EXPORT_SPACE``) in the file's working space."""
+    return convert_coefficients(coeffs, EXPORT_SPACE, compat.working_space())
+
+
 def export_coefficients(coeffs, path, format="sh_lighting", overwrite=False, metadata=None):
-    """Write ``coeffs`` (9, 3) to ``path`` in ``format``, atomically; returns the Path.
+    """Write ``coeffs`` (9, 3, in the file's working space) to ``path`` in ``format``,
+    converted to ``EXPORT_SPACE`` (``to_export_space``), atomically; returns the Path.
 
     FileExistsError if ``path`` exists and ``overwrite`` is false (nothing written); ValueError
     (PresetError for our format) for coefficients or metadata that cannot be written.
@@ -216,6 +239,8 @@ def export_coefficients(coeffs, path, format="sh_lighting", overwrite=False, met
     path = Path(path)
     metadata = dict(metadata or {})
     metadata.setdefault("name", path.stem)
+    error = PresetError if _format_id(format) == "sh_lighting" else ValueError
+    coeffs = to_export_space(coeffs, error)
     text = export_text(coeffs, format, metadata)  # every check happens before any write
     return atomic.write_text_atomic(path, text, overwrite, what="file", hint=OVERWRITE_HINT)
 
@@ -247,7 +272,7 @@ def import_preset(scene, path):
     The values do not become the Reset values (module docstring).
     """
     coeffs, metadata = read_preset_file(path)
-    return scene_data.store(scene, coeffs, preset_provenance(path, metadata))
+    return scene_data.store(scene, from_preset_space(coeffs), preset_provenance(path, metadata))
 
 
 def preset_provenance(path, metadata):

@@ -15,12 +15,14 @@ function returns new float64 coefficients of the same shape (Blender world axes,
 
 import numpy as np
 
+from .colour import luminance_weights
 from .irradiance import C4, TERM_PEAKS, check_coefficients
 from .rotation import rotate_coefficients
 from .sh import COEFFICIENT_NAMES, band_of_each_coefficient
 
-# Rec. 709 / sRGB luminance weights (they sum to 1, so grey keeps the luminance).
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+# Luminance weights of linear Rec.709 RGB (``core.colour.luminance_weights``; they sum to 1, so
+# grey keeps the luminance); callers in another working space pass that space's weights.
+LUMINANCE = luminance_weights()
 
 
 def _axis_rotation(axis, angle):
@@ -64,16 +66,17 @@ def _bands_mask(order, bands):
     return np.isin(band, list(bands))
 
 
-def saturation(coeffs, amount, bands=None):
+def saturation(coeffs, amount, bands=None, luminance=LUMINANCE):
     """Each coefficient's RGB blended with its grey: grey + amount · (L_lm − grey).
 
-    grey = 0.2126 R + 0.7152 G + 0.0722 B (Rec. 709 luminance) of that coefficient, so the
-    luminance of the lighting, and of the irradiance, is unchanged. ``amount``: 0 grey, 1
-    unchanged, > 1 more saturated. ``bands``: the bands l to change (default all), e.g. (1, 2)
-    to grey out only the directional colour and keep the ambient tint.
+    grey = ``luminance`` · RGB of that coefficient (default Rec.709's 0.2126 R + 0.7152 G +
+    0.0722 B; ``core.colour.luminance_weights`` of the working space), so the luminance of the
+    lighting, and of the irradiance, is unchanged. ``amount``: 0 grey, 1 unchanged, > 1 more
+    saturated. ``bands``: the bands l to change (default all), e.g. (1, 2) to grey out only
+    the directional colour and keep the ambient tint.
     """
     c, order = check_coefficients(coeffs)
-    grey = (c @ LUMINANCE)[:, None]
+    grey = (c @ np.asarray(luminance, dtype=np.float64))[:, None]
     out = c.copy()
     mask = _bands_mask(order, bands)
     out[mask] += (amount - 1.0) * (c[mask] - grey[mask])  # amount 1: exactly unchanged
@@ -133,11 +136,11 @@ NEGLIGIBLE = 0.02  # a term moving E by < 2 % of its mean is called negligible
 SLIGHT = 0.10  # < 10 %: "slightly"
 
 
-def describe_coefficients(coeffs):
+def describe_coefficients(coeffs, luminance=LUMINANCE):
     """Nine short strings saying what each L_lm does in this lighting, e.g.
     "L10 +0.42: lit from above (±50 % of the mean)".
 
-    Uses the luminance (Rec. 709) of each RGB coefficient. Each term's effect is measured as
+    Uses the luminance of each RGB coefficient (weights ``luminance``, default Rec.709's). Each term's effect is measured as
     the most it adds to or removes from E(n) (Â_l |L_lm| max|Y_lm| = ``TERM_PEAKS`` · |L_lm|,
     eq. 6 and 13) relative to the mean irradiance c4 L00 = Â_0 L00 Y00: below 2 % it is called
     negligible, below 10 % slight.
@@ -146,7 +149,7 @@ def describe_coefficients(coeffs):
     c, order = check_coefficients(coeffs)
     if order != 2:
         raise ValueError(f"descriptions need the 9 coefficients of order 2, got order {order}")
-    lum = c @ LUMINANCE
+    lum = c @ np.asarray(luminance, dtype=np.float64)
     mean = C4 * lum[0]
     lines = []
     if mean > 0.0:

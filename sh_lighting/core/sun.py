@@ -119,16 +119,19 @@ def detect_sun(
     peak_fraction=PEAK_FRACTION,
     max_radius=MAX_RADIUS,
     min_power_fraction=MIN_POWER_FRACTION,
+    luminance=LUMINANCE,
 ):
     """The dominant small bright source of an equirect map as a ``Sun``, or None if there is none.
 
     ``pixels``: (H, W, 3 or 4) linear radiance, rows top to bottom. Criteria and the meaning of
-    each parameter: module docstring.
+    each parameter: module docstring; ``luminance``: the RGB weights of Y in the pixels' space
+    (``core.colour.luminance_weights``; default Rec.709's).
     """
+    luminance = np.asarray(luminance, dtype=np.float64)
     a = check_finite_pixels(check_pixels(pixels))
     height, width, _ = a.shape
     rgb = a[..., :3].astype(np.float64)
-    lum = rgb @ LUMINANCE
+    lum = rgb @ luminance
     solid = texel_solid_angles(height, width)
     background = weighted_median(lum, solid[:, None])
     total = float((lum * solid[:, None]).sum())
@@ -159,11 +162,11 @@ def detect_sun(
     inside = rgb[band][region]
     excess = (inside - np.minimum(inside, fill)) * weights[:, None]  # (N, 3) radiance × dΩ
     sun_irradiance = excess.sum(axis=0)
-    sun_power = float(sun_irradiance @ LUMINANCE)
+    sun_power = float(sun_irradiance @ luminance)
     if sun_power < min_power_fraction * total:
         return None
     directions = texel_directions(height, width, band)[region]
-    direction = (excess @ LUMINANCE) @ directions
+    direction = (excess @ luminance) @ directions
     direction /= np.linalg.norm(direction)
     if np.arccos(np.clip(directions @ direction, -1.0, 1.0)).max() >= max_radius:
         return None

@@ -190,3 +190,116 @@ def test_transparent_8bit_texels_are_left_to_cycles(tmp_path):
     assert rel_err(coeffs, cycles(world, 32)) < 1e-3  # the capture is refined, the other not
     with pytest.raises(DecodeError, match="transparent texels"):
         load_image_pixels(path)
+
+
+# -- exports, presets, the cache and luminance follow the working space --------------------------
+
+
+def blender_luminance():
+    """Blender's own luminance weights of the working space (Y of its XYZ conversion)."""
+    return np.array(
+        [mathutils.Color(tuple(e)).from_scene_linear_to_xyz_d65()[1] for e in np.eye(3)]
+    )
+
+
+def red_world_coefficients(tmp_path, working):
+    set_working_space(working)
+    red = np.zeros((8, 16, 3))
+    red[..., 0] = 255
+    red[:4, :, 1] = 128  # not constant: every band carries colour
+    image_world(bpy.data.images.load(write_png(tmp_path / f"red_{working[-3:]}.png", red)))
+    return world_coefficients(bpy.context.scene)[0]
+
+
+@needs_working_spaces
+def test_exports_are_linear_rec709_and_presets_come_back(tmp_path, addon):
+    """An ACEScg file exports what the same image gives in a Rec.709 file (in every format),
+    and importing its preset gives back its ACEScg values."""
+    from sh_lighting import api
+    from sh_lighting.blender import preset_io, scene_data
+    from sh_lighting.core.interop import to_threejs_sh
+
+    rec709 = red_world_coefficients(tmp_path, "Linear Rec.709")
+    acescg = red_world_coefficients(tmp_path, "ACEScg")
+    assert rel_err(acescg, rec709) > 0.1  # the spaces differ
+    scene = bpy.context.scene
+    api.set_coefficients(scene, acescg)
+    path = preset_io.export_preset(scene, tmp_path / "p.json")
+    written, _ = preset_io.read_preset_file(path)
+    assert rel_err(written, rec709) < 1e-6
+    three = json.loads(preset_io.export_preset(scene, tmp_path / "t.json", "threejs").read_text())
+    assert np.abs(np.array(three["sh"]) - to_threejs_sh(rec709)).max() < 1e-6 * np.abs(rec709).max()
+    api.set_coefficients(scene, np.zeros((9, 3)))
+    preset_io.import_preset(scene, path)
+    assert rel_err(scene_data.get_coefficients(scene), acescg) < 1e-9
+
+
+@needs_working_spaces
+def test_compute_again_follows_a_switched_working_space(tmp_path):
+    """Compute has no cache (benchmarks/REPORT.md §5): computing again after switching the
+    working space gives that space's coefficients."""
+    from sh_lighting.blender import world
+
+    set_working_space("Linear Rec.709")
+    red = np.zeros((8, 16, 3))
+    red[..., 0] = 255
+    image_world(bpy.data.images.load(write_png(tmp_path / "red.png", red)))
+    first, info = world.world_coefficients(bpy.context.scene)
+    assert bpy.ops.wm.set_working_color_space(working_space="ACEScg",
+                                              convert_colors=False) == {"FINISHED"}
+    second, info = world.world_coefficients(bpy.context.scene)
+    assert info.working_space == "ACEScg"
+    assert abs(second[0, 0] / first[0, 0] - 0.6131) < 1e-3
+
+
+@needs_working_spaces
+def test_saturation_greys_with_the_working_spaces_luminance(addon):
+    from sh_lighting import api
+    from sh_lighting.blender import design, scene_data
+
+    set_working_space("ACEScg")
+    scene = bpy.context.scene
+    coeffs = np.random.default_rng(3).normal(size=(9, 3))
+    api.set_coefficients(scene, coeffs)
+    design.saturation(scene, 0.0)
+    grey = coeffs @ blender_luminance()
+    # Blender's weights are float32 (6e-7 from the exact ones), the coefficients up to ~3.
+    assert np.abs(scene_data.get_coefficients(scene) - grey[:, None]).max() < 5e-6
+    assert np.abs(grey - coeffs @ [0.2126, 0.7152, 0.0722]).max() > 1e-3  # not Rec.709's
+
+
+@needs_working_spaces
+def test_command_line_compute_and_apply_in_an_acescg_file(tmp_path):
+    """`compute` of an ACEScg .blend writes Rec.709 (what the same image gives in a Rec.709
+    file); `apply` of that preset stores the ACEScg values in the .blend."""
+    rec709 = red_world_coefficients(tmp_path, "Linear Rec.709")
+    acescg = red_world_coefficients(tmp_path, "ACEScg")
+    scene = bpy.context.scene
+    material = bpy.data.materials.new("Grey")
+    if material.node_tree is None:
+        material.use_nodes = True
+    mesh = bpy.data.meshes.new("Plane")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [], [(0, 1, 2)])
+    mesh.materials.append(material)
+    scene.collection.objects.link(bpy.data.objects.new("Plane", mesh))
+    blend = tmp_path / "aces.blend"
+    scene.world.node_tree.nodes["Environment Texture"].image.pack()  # travels with the file
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+
+    def run(*args):
+        done = subprocess.run([sys.executable, "-m", "sh_lighting", *map(str, args)], env=env,
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+
+    preset = tmp_path / "aces.json"
+    run("compute", blend, "--out", preset)
+    written = json.loads(preset.read_text())["coefficients"]
+    assert rel_err([written[k] for k in written], rec709) < 1e-6
+    out = tmp_path / "applied.blend"
+    run("apply", preset, blend, "--out", out)
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    from sh_lighting.blender import scene_data
+
+    assert compat.working_space() == "ACEScg"
+    assert rel_err(scene_data.get_coefficients(bpy.context.scene), acescg) < 1e-6
