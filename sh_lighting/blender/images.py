@@ -15,7 +15,7 @@ What ``Image.pixels`` holds (observed on Blender 4.2 and 5.0, see tests/blender/
 the command line's ``compute`` and ``batch`` through ``load_image_pixels``): the radiance
 Blender renders. Float pixels are used as they are; 8-bit texels are decoded from the image's
 colour space (``core.colour.BYTE_SPACES``: sRGB and the linear spaces; "Non-Color" data is
-used as it is) to the file's working space as Cycles does it (``core.colour.byte_tables``):
+used as it is) to the file's working space as Cycles does it (``core.colour.byte_decoding``):
 mid-grey byte 128 of an sRGB PNG is 0.2159 in a Rec.709 file, pure red is
 (0.613, 0.070, 0.021) in an ACEScg one (tests against Cycles captures in
 tests/blender/test_colour_spaces.py). Images Blender renders otherwise than modelled here
@@ -29,7 +29,7 @@ import os
 import bpy
 import numpy as np
 
-from ..core.colour import BYTE_SPACES, byte_tables, decode_bytes
+from ..core.colour import BYTE_SPACES, byte_decoding, decode_bytes
 from .compat import working_space
 
 
@@ -148,9 +148,9 @@ def linear_pixels(image):
     settings = image.colorspace_settings
     if image.is_float or settings.is_data:
         return np.ascontiguousarray(pixels)
-    codes = np.rint(pixels[..., :3] * 255.0).astype(np.uint8)
+    codes = (pixels[..., :3] * 255.0 + 0.5).astype(np.uint8)  # exact: pixels are byte / 255
     decoded = np.empty(pixels.shape, dtype=np.float32)
-    decoded[..., :3] = decode_bytes(codes, byte_tables(settings.name, working_space()))
+    decoded[..., :3] = decode_bytes(codes, *byte_decoding(settings.name, working_space()))
     decoded[..., 3] = pixels[..., 3]
     return decoded
 

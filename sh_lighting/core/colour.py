@@ -21,9 +21,9 @@ S-2014-004 for AP1 with the ACES white). From them:
 **8-bit texels.** An 8-bit image in colour space ``BYTE_SPACES`` is decoded as Blender renders
 it: byte / 255, its transfer curve (the exact IEC 61966-2-1 sRGB curve, ``srgb_to_linear``,
 which Cycles applies in float32 to sRGB textures of a Rec.709 file), then the matrix from the
-image's primaries to the working space (what OpenColorIO applies on load otherwise). As both
-steps act per channel and then mix linearly, ``byte_tables`` tabulates each byte of each
-channel once and ``decode_bytes`` sums three table look-ups per texel. Checked against Cycles
+image's primaries to the working space (what OpenColorIO applies on load otherwise):
+``byte_decoding`` tabulates the curve for the 256 bytes and gives the matrix, ``decode_bytes``
+applies them (a table look-up per channel, a 3×3 product per texel). Checked against Cycles
 captures for every space in both a Rec.709 and an ACEScg file (tests/blender/test_colour_spaces.py).
 """
 
@@ -108,9 +108,11 @@ def convert_coefficients(coeffs, source, target=REC709):
     return c @ conversion_matrix(source, target).T
 
 
-def byte_tables(space, working):
-    """(3, 256, 3) float32 tables of ``decode_bytes``: ``[k, b]`` is byte b in channel k of
-    an image in ``space`` (a ``BYTE_SPACES`` name) as linear RGB of ``working``."""
+def byte_decoding(space, working):
+    """How 8-bit texels of an image in ``space`` (a ``BYTE_SPACES`` name) become linear RGB of
+    ``working``: (curve, matrix) for ``decode_bytes``. curve (256,) float32: each byte's
+    linear value; matrix (3, 3) float32 from the image's primaries to ``working``, or None
+    when they are the same."""
     try:
         curve, primaries = BYTE_SPACES[space]
     except KeyError:
@@ -120,24 +122,17 @@ def byte_tables(space, working):
     values = np.arange(256) / 255.0
     if curve == "srgb":
         values = srgb_to_linear(values)
-    matrix = conversion_matrix(primaries, working)
-    return (values[None, :, None] * matrix.T[:, None, :]).astype(np.float32)
+    matrix = None if primaries == working else conversion_matrix(primaries, working)
+    return values.astype(np.float32), None if matrix is None else matrix.astype(np.float32)
 
 
-def decode_bytes(codes, tables):
-    """Linear RGB (H, W, 3) float32 of 8-bit texels ``codes`` (H, W, 3) uint8.
-
-    ``tables`` (3, 256, 3): ``tables[k, b]`` is the decoded RGB of byte b in channel k with the
-    other channels 0; the result is Σ_k tables[k, codes[..., k]] (exact for colour spaces that
-    decode each channel by a curve and then mix the channels linearly).
-    """
-    t = np.asarray(tables, dtype=np.float32)
-    if t.shape != (3, 256, 3):
-        raise ValueError(f"byte decoding tables must have shape (3, 256, 3), got {t.shape}")
-    out = t[0][codes[..., 0]]
-    out += t[1][codes[..., 1]]
-    out += t[2][codes[..., 2]]
-    return out
+def decode_bytes(codes, curve, matrix=None):
+    """Linear RGB (H, W, 3) float32 of 8-bit texels ``codes`` (H, W, 3) uint8:
+    ``matrix`` · curve[codes] per texel (``byte_decoding``; no matrix: curve[codes])."""
+    linear = np.asarray(curve, dtype=np.float32)[codes]
+    if matrix is None:
+        return linear
+    return linear @ np.asarray(matrix, dtype=np.float32).T
 
 
 def srgb_to_linear(values):

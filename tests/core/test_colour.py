@@ -73,15 +73,17 @@ def test_conversions_keep_white_and_invert():
         colour.convert_coefficients(np.ones((9, 4)), "ACEScg", "Linear Rec.709")
 
 
-def test_byte_tables_decode_each_channel_then_mix():
+def test_byte_decoding_is_the_curve_then_the_primaries_matrix():
     codes = np.random.default_rng(1).integers(0, 256, (4, 5, 3)).astype(np.uint8)
-    decoded = colour.decode_bytes(codes, colour.byte_tables("sRGB", "Linear Rec.709"))
+    curve, matrix = colour.byte_decoding("sRGB", "Linear Rec.709")
+    assert matrix is None and curve.dtype == np.float32 and curve.shape == (256,)
+    decoded = colour.decode_bytes(codes, curve, matrix)
     assert decoded.dtype == np.float32
     assert np.abs(decoded - srgb_to_linear(codes / 255.0)).max() < 1e-7
-    acescg = colour.decode_bytes(codes, colour.byte_tables("sRGB", "ACEScg"))
+    acescg = colour.decode_bytes(codes, *colour.byte_decoding("sRGB", "ACEScg"))
     expected = srgb_to_linear(codes / 255.0) @ np.array(REC709_TO_ACESCG).T
-    assert np.abs(acescg - expected).max() < 1e-4
-    linear = colour.decode_bytes(codes, colour.byte_tables("ACEScg", "ACEScg"))
+    assert acescg.dtype == np.float32 and np.abs(acescg - expected).max() < 1e-4
+    linear = colour.decode_bytes(codes, *colour.byte_decoding("ACEScg", "ACEScg"))
     assert np.abs(linear - codes / 255.0).max() < 1e-7
     with pytest.raises(ValueError, match="not decoded here"):
-        colour.byte_tables("Display P3", "ACEScg")
+        colour.byte_decoding("Display P3", "ACEScg")
