@@ -19,10 +19,11 @@ a symbolic link is written through to its target, no output is ever one of the c
 inputs, and a path starting with ``//`` is relative to the .blend's folder, as in Blender):
 
 * ``compute HDRI_OR_BLEND [--out PRESET] [--overwrite] [--capture-width N] [--format F]
-  [--nonfinite raise|zero]``:
-  the 9 coefficients of an equirectangular HDRI file, or of the world of a .blend (read only,
-  not saved); prints the table and, with ``--out``, writes a preset (an HDRI's preset carries
-  its 9-term error estimate).
+  [--nonfinite raise|zero] [--filament-frame cmgen|gltf]``: the 9 coefficients of an
+  equirectangular HDRI file, or of the world of a .blend (read only, not saved); prints the
+  table and, with ``--out``, writes a preset (an HDRI's preset carries its 9-term error
+  estimate) or a file for three.js, glTF (a .gltf environment with a specular cube from the
+  image) or Filament.
 * ``apply PRESET [BLEND] (--out NEW.blend | --in-place) [--objects NAME ...] [--overwrite]``:
   sets the coefficients and applies the SH node group to the materials of all (or the named)
   objects of the scene, then saves. An output is required: ``--out`` (refused if it exists,
@@ -57,6 +58,7 @@ PROG = "python -m sh_lighting"
 ERROR_NORMALS = 256
 DEFAULT_PATTERNS = "*.exr,*.hdr"
 FORMAT_CHOICES = ("sh_lighting", "threejs", "gltf", "filament")
+FILAMENT_FRAMES = ("cmgen", "gltf")  # preset_io.FILAMENT_FRAMES (its first is the default)
 
 
 class CommandError(Exception):
@@ -127,8 +129,9 @@ def library_output_captured():
             os.close(saved)
 
 
-def hdri_coefficients(path, nonfinite="raise"):
-    """(coefficients (9, 3), metadata) of the equirectangular image file at ``path``.
+def hdri_coefficients(path, nonfinite="raise", keep_pixels=False):
+    """(coefficients (9, 3), metadata) of the equirectangular image file at ``path``; with
+    ``keep_pixels``, (coefficients, metadata, pixels).
 
     ``nonfinite``: "raise" refuses NaN/Inf texels, "zero" treats them as black.
     """
@@ -156,7 +159,7 @@ def hdri_coefficients(path, nonfinite="raise"):
         raise CommandError(f"{path}: {error}") from None
     metadata = {
         "name": Path(path).stem,
-        "source": str(Path(path).resolve()),
+        "source": Path(path).name,  # the file name only, never a local absolute path
         "mapping": [0.0, 0.0, 0.0],
         "strength": 1.0,
         "created": date.today().isoformat(),
@@ -168,7 +171,7 @@ def hdri_coefficients(path, nonfinite="raise"):
         metadata["notes"] += (
             f" Error estimate at {ERROR_NORMALS} normals against the exact irradiance."
         )
-    return coeffs, metadata
+    return (coeffs, metadata, pixels) if keep_pixels else (coeffs, metadata)
 
 
 # --- paths: inputs, outputs, // and leftovers -----------------------------------------------
@@ -333,13 +336,15 @@ def cmd_compute(args):
         except ValueError as error:
             raise CommandError(f"{source}: {error}") from None
         metadata = preset_io.scene_metadata(scene)
+        environment = preset_io.world_environment(scene) if args.format == "gltf" else None
         metadata["name"] = source.stem
         origin = metadata.get("source")
         how = f"image {origin}" if origin else "a Cycles capture"
         metadata["notes"] = f"Computed from world '{scene.world.name}' of {source.name} ({how})."
         _print(f"World '{scene.world.name}' of {source} (scene '{scene.name}', from {how})")
     else:
-        coeffs, metadata = hdri_coefficients(source, args.nonfinite)
+        coeffs, metadata, pixels = hdri_coefficients(source, args.nonfinite, keep_pixels=True)
+        environment = (pixels, 1.0, None)
         _print(f"HDRI {source}")
     elapsed = time.perf_counter() - start
     _print("Lighting coefficients L_lm (raw radiance, Blender world axes, z up):")
@@ -356,11 +361,12 @@ def cmd_compute(args):
         remove_own_leftovers(out)
         try:
             path = preset_io.export_coefficients(
-                coeffs, out, args.format, args.overwrite, metadata
+                coeffs, out, args.format, args.overwrite, metadata, environment,
+                args.filament_frame,
             )
         except (OSError, ValueError) as error:
             raise CommandError(str(error)) from None
-        _print(f"Wrote {args.format} preset {path}")
+        _print(f"Wrote {preset_io.FORMATS[args.format][0]} {path}")
     return 0
 
 
@@ -671,7 +677,16 @@ def build_parser(prog=PROG):
     p.add_argument("--out", metavar="PRESET", help="write the coefficients to this file")
     p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
     p.add_argument("--format", choices=FORMAT_CHOICES, default="sh_lighting",
-                   help="file format of --out (default: sh_lighting preset JSON)")
+                   help="file format of --out: sh_lighting (our preset JSON, the default), "
+                   "threejs (a LightProbe for three.js's ObjectLoader), gltf (a .gltf "
+                   "EXT_lights_image_based environment: irradiance coefficients and a "
+                   "specular cube prefiltered from the image, as Babylon.js reads it), "
+                   "filament (a cmgen-style sh.txt)")
+    p.add_argument("--filament-frame", choices=FILAMENT_FRAMES, default=FILAMENT_FRAMES[0],
+                   help="axes of --format filament: cmgen (the default) lines up with what "
+                   "cmgen writes for the same equirect image (its specular KTX); gltf lines "
+                   "up with a glTF export of the Blender scene. Not windowed (cmgen's "
+                   "default is --sh-window=auto)")
     p.add_argument("--capture-width", type=_positive, metavar="N",
                    help="width of the Cycles capture of a procedural world (default: the "
                    "scene's setting, else 256)")

@@ -7,14 +7,16 @@ Formats written by :func:`export_preset` (``FORMATS``), every one atomically (a 
 moved into place, ``core.atomic``) and never over an existing file unless ``overwrite=True``:
 
 * ``"sh_lighting"``: our preset JSON (``core.presets``: raw L_lm, Blender axes), with metadata;
-* ``"threejs"``: JSON ``{"type": "LightProbe", "intensity": 1, "sh": [27 floats], ...}``,
-  what ``new LightProbe().fromJSON(json)`` reads (``sh`` alone feeds
+* ``"threejs"``: a three.js object JSON holding one ``LightProbe`` (what
+  ``new ObjectLoader().parse(json)`` reads; ``json.object.sh`` feeds
   ``SphericalHarmonics3.fromArray``): radiance L_lm, y-up glTF frame (``core.interop``);
-* ``"gltf"``: JSON of one ``EXT_lights_image_based`` light without its specular images:
-  ``{"name", "intensity", "rotation", "irradianceCoefficients": 9×3, "extras"}``; the
-  coefficients are (−1)^|m| Â_l L_lm in the glTF frame (what Babylon.js reads; see interop);
-* ``"filament"``: cmgen ``sh.txt`` text, 9 lines of shader-ready (pre-scaled) values, glTF
-  frame, no windowing.
+* ``"gltf"``: a .gltf file of one complete ``EXT_lights_image_based`` environment: the
+  irradiance coefficients as Babylon.js reads them and a specular cube mip chain prefiltered
+  from the world image (``world_environment``), or from the 9-term lighting itself when the
+  coefficients are not the ones computed from an equirect world image
+  (``core.gltf_environment``);
+* ``"filament"``: cmgen ``sh.txt`` text, 9 lines of shader-ready (pre-scaled) values, no
+  windowing, in cmgen's frame (default) or the glTF frame (``FILAMENT_FRAMES``).
 
 Every format holds linear Rec.709 RGB (``EXPORT_SPACE``): ``export_coefficients`` converts
 from the file's working colour space in one place (``to_export_space``), and importing
@@ -50,17 +52,23 @@ import numpy as np
 from ..core import atomic
 from ..core.coefficients import check_coefficients
 from ..core.colour import REC709, convert_coefficients
-from ..core.interop import to_filament_sh_txt, to_gltf_irradiance_coefficients, to_threejs_sh
+from ..core.gltf_environment import gltf_text
+from ..core.interop import to_filament_sh_txt, to_threejs_json
 from ..core.presets import PresetError, preset_to_json, read_preset
 from . import compat, scene_data
 from . import world as world_module
 
 # format id -> (label, file extension)
 FORMATS = {
-    "sh_lighting": ("sh_lighting JSON", ".json"),
-    "threejs": ("three.js SphericalHarmonics3 JSON", ".json"),
-    "gltf": ("glTF EXT_lights_image_based irradianceCoefficients JSON", ".json"),
+    "sh_lighting": ("SH Lighting preset", ".json"),
+    "threejs": ("three.js LightProbe JSON", ".json"),
+    "gltf": ("glTF environment (EXT_lights_image_based)", ".gltf"),
     "filament": ("Filament sh.txt", ".txt"),
+}
+# Filament frame id -> what it lines up with (core.interop); the first is the default
+FILAMENT_FRAMES = {
+    "cmgen": "cmgen's own output (its specular KTX) for the same equirect image",
+    "gltf": "a glTF export of the Blender scene",
 }
 PRESET_SUBDIR = "sh_lighting"
 PRESET_EXTENSION = ".json"
@@ -157,7 +165,9 @@ def scene_metadata(scene):
         return metadata
     image = source.image
     path = bpy.path.abspath(image.filepath, library=image.library) if image.filepath else ""
-    metadata["source"] = os.path.normpath(path) if path else f"image '{image.name}'"
+    # the file name only: an absolute local path would leak into files people share
+    name = os.path.basename(os.path.normpath(path)) if path else ""
+    metadata["source"] = name or f"image '{image.name}'"
     metadata["mapping"] = list(source.rotation) if source.rotation is not None else [0.0, 0.0, 0.0]
     metadata["strength"] = source.strength
     return metadata
@@ -188,32 +198,57 @@ def _format_id(format):
     return key
 
 
-def export_text(coeffs, format="sh_lighting", metadata=None):
-    """The text of ``coeffs`` (9, 3) in ``format`` (see ``FORMATS``), with ``metadata``."""
+def _filament_frame_id(frame):
+    key = str(frame).lower()
+    if key not in FILAMENT_FRAMES:
+        raise ValueError(
+            f"unknown Filament frame {frame!r}: use one of {', '.join(FILAMENT_FRAMES)}"
+        )
+    return key
+
+
+def world_environment(scene):
+    """(pixels, strength, Mapping Euler) of ``scene``'s world image (``world.read_world``;
+    pixels in the file's working space) when its coefficients are exactly the ones last
+    computed from that world and it is an equirect Environment Texture read directly; else
+    None (the glTF specular cube then comes from the 9 terms).
+    """
+    computed = scene_data.get_computed(scene)
+    if computed is None or not scene_data.has_coefficients(scene):
+        return None
+    if not np.array_equal(computed, scene_data.get_coefficients(scene)):
+        return None  # edited or loaded since: the world image is not this lighting
+    try:
+        source = world_module.read_world(scene)
+        if not isinstance(source, world_module.ImageSource):
+            return None  # a procedural world: no image
+        if source.projection != "EQUIRECTANGULAR":
+            return None
+        return source.pixels(), source.strength, source.rotation
+    except world_module.WorldError:  # a broken world or no pixel data: no image
+        return None
+
+
+def export_text(coeffs, format="sh_lighting", metadata=None, environment=None,
+                filament_frame="cmgen"):
+    """The text of ``coeffs`` (9, 3) in ``format`` (see ``FORMATS``), with ``metadata``.
+
+    ``environment``: (pixels, strength, euler) of the world image for the glTF specular cube
+    (``world_environment``), or None; ``filament_frame``: a key of ``FILAMENT_FRAMES``.
+    """
     key = _format_id(format)
     metadata = dict(metadata or {})
     if key == "sh_lighting":
         return preset_to_json(coeffs, metadata)
     if key == "filament":
-        return to_filament_sh_txt(coeffs)
+        return to_filament_sh_txt(coeffs, _filament_frame_id(filament_frame))
     extras = {"generator": GENERATOR, "frame": "gltf_y_up", **metadata}
     if key == "threejs":
-        d = {
-            "type": "LightProbe",
-            "name": metadata.get("name", ""),
-            "intensity": 1.0,
-            "sh": to_threejs_sh(coeffs),
-            "userData": extras,
-        }
-    else:
-        d = {
-            "name": metadata.get("name", ""),
-            "intensity": 1.0,
-            "rotation": [0.0, 0.0, 0.0, 1.0],
-            "irradianceCoefficients": to_gltf_irradiance_coefficients(coeffs),
-            "extras": extras,
-        }
-    return json.dumps(d, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+        d = to_threejs_json(coeffs, metadata.get("name", ""), extras)
+        return json.dumps(d, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    pixels, strength, euler = environment or (None, 1.0, None)
+    extras["specular_source"] = "world image" if pixels is not None else "9-term lighting"
+    return gltf_text(coeffs, pixels, strength, euler, metadata.get("name", ""), extras)
 
 
 def to_export_space(coeffs, error=ValueError):
@@ -229,34 +264,49 @@ def from_preset_space(coeffs):
     return convert_coefficients(coeffs, EXPORT_SPACE, compat.working_space())
 
 
-def export_coefficients(coeffs, path, format="sh_lighting", overwrite=False, metadata=None):
+def export_coefficients(coeffs, path, format="sh_lighting", overwrite=False, metadata=None,
+                        environment=None, filament_frame="cmgen"):
     """Write ``coeffs`` (9, 3, in the file's working space) to ``path`` in ``format``,
-    converted to ``EXPORT_SPACE`` (``to_export_space``), atomically; returns the Path.
+    converted to ``EXPORT_SPACE`` (``to_export_space``; so are the pixels of
+    ``environment``), atomically; returns the Path.
 
-    FileExistsError if ``path`` exists and ``overwrite`` is false (nothing written); ValueError
-    (PresetError for our format) for coefficients or metadata that cannot be written.
+    ``environment`` and ``filament_frame`` as for :func:`export_text`. FileExistsError if
+    ``path`` exists and ``overwrite`` is false (nothing written); ValueError (PresetError for
+    our format) for coefficients or metadata that cannot be written.
     """
     path = Path(path)
     metadata = dict(metadata or {})
     metadata.setdefault("name", path.stem)
     error = PresetError if _format_id(format) == "sh_lighting" else ValueError
     coeffs = to_export_space(coeffs, error)
-    text = export_text(coeffs, format, metadata)  # every check happens before any write
+    if environment is not None:
+        pixels, strength, euler = environment
+        pixels = convert_coefficients(
+            np.asarray(pixels)[..., :3], compat.working_space(), EXPORT_SPACE
+        )
+        environment = (pixels, strength, euler)
+    # every check happens before any write
+    text = export_text(coeffs, format, metadata, environment, filament_frame)
     return atomic.write_text_atomic(path, text, overwrite, what="file", hint=OVERWRITE_HINT)
 
 
-def export_preset(scene, path, format="sh_lighting", overwrite=False, metadata=None):
+def export_preset(scene, path, format="sh_lighting", overwrite=False, metadata=None,
+                  filament_frame="cmgen"):
     """Write ``scene``'s coefficients to ``path`` in ``format`` (see ``FORMATS``); the Path.
 
-    ``metadata`` entries are added to (and win over) ``scene_metadata(scene)``. LookupError
-    if the scene has no coefficients, FileExistsError if ``path`` exists and ``overwrite`` is
+    ``metadata`` entries are added to (and win over) ``scene_metadata(scene)``; a glTF
+    environment's specular cube comes from ``world_environment(scene)``. LookupError if the
+    scene has no coefficients, FileExistsError if ``path`` exists and ``overwrite`` is
     false; in every error case nothing is written.
     """
     path = file_path(path)
     coeffs = scene_data.get_coefficients(scene)
     merged = scene_metadata(scene)
     merged.update(metadata or {})
-    return export_coefficients(coeffs, path, format, overwrite, merged)
+    environment = world_environment(scene) if _format_id(format) == "gltf" else None
+    return export_coefficients(
+        coeffs, path, format, overwrite, merged, environment, filament_frame
+    )
 
 
 def read_preset_file(path):

@@ -52,12 +52,12 @@ FORMAT_ITEMS = tuple(
         ("sh_lighting", preset_io.FORMATS["sh_lighting"][0],
          "SH Lighting preset: raw L_lm in Blender axes, with metadata (Import reads it)"),
         ("threejs", preset_io.FORMATS["threejs"][0],
-         "LightProbe JSON for three.js: radiance L_lm, y-up glTF axes"),
+         "A LightProbe for three.js (ObjectLoader JSON): radiance L_lm, y-up glTF axes"),
         ("gltf", preset_io.FORMATS["gltf"][0],
-         "One EXT_lights_image_based light (add its specular images): irradiance "
-         "coefficients as Babylon.js reads them, y-up glTF axes"),
+         "A .gltf environment for Babylon.js: irradiance coefficients and a specular cube "
+         "prefiltered from the world image, y-up glTF axes"),
         ("filament", preset_io.FORMATS["filament"][0],
-         "cmgen sh.txt for Filament: shader-ready pre-scaled irradiance, y-up glTF axes"),
+         "cmgen-style sh.txt for Filament: shader-ready pre-scaled irradiance"),
     )
 )
 KNOWN_EXTENSIONS = {ext for _label, ext in preset_io.FORMATS.values()}
@@ -130,20 +130,32 @@ class SHLIGHT_OT_import_preset(bpy.types.Operator, ImportHelper):
         return load_preset_file(self, context.scene, self.filepath)
 
 
+FILAMENT_FRAME_ITEMS = tuple(
+    (key.upper(), key, f"Line up with {what}")
+    for key, what in preset_io.FILAMENT_FRAMES.items()
+)
+
+
 class SHLIGHT_OT_export_preset(bpy.types.Operator, ExportHelper):
-    """Write the scene's SH coefficients as a preset, or for three.js, glTF or Filament"""
+    """Write the scene's SH lighting as a preset, or for three.js, glTF or Filament"""
 
     bl_idname = EXPORT
-    bl_label = "Export SH Preset"
+    bl_label = "Export SH Lighting"
     bl_options = {"REGISTER"}
 
     filename_ext = ".json"
-    filter_glob: StringProperty(default="*.json;*.txt", options={"HIDDEN"})
+    filter_glob: StringProperty(default="*.json;*.txt;*.gltf", options={"HIDDEN"})
     export_format: EnumProperty(
         name="Format",
         description="What to write: our preset, or the form another renderer reads",
         items=FORMAT_ITEMS,
         default="SH_LIGHTING",
+    )
+    filament_frame: EnumProperty(
+        name="Axes",
+        description="Filament sh.txt axes: cmgen's (its specular KTX of the same image) or glTF's",
+        items=FILAMENT_FRAME_ITEMS,
+        default=FILAMENT_FRAME_ITEMS[0][0],
     )
     overwrite: BoolProperty(
         name="Overwrite",
@@ -156,7 +168,7 @@ class SHLIGHT_OT_export_preset(bpy.types.Operator, ExportHelper):
         return _coefficients_poll(cls, context)
 
     def check(self, _context):
-        """Give the file name the extension of the chosen format (.json or .txt)."""
+        """Give the file name the extension of the chosen format (.json, .gltf or .txt)."""
         wanted = preset_io.FORMATS[self.export_format.lower()][1]
         path = self.filepath
         if not os.path.basename(path):
@@ -172,18 +184,21 @@ class SHLIGHT_OT_export_preset(bpy.types.Operator, ExportHelper):
         layout.use_property_split = True
         layout.use_property_decorate = False
         layout.prop(self, "export_format")
+        if self.export_format == "FILAMENT":
+            layout.prop(self, "filament_frame")
         layout.prop(self, "overwrite")
 
     def execute(self, context):
         try:
             path = preset_io.export_preset(
-                context.scene, self.filepath, self.export_format.lower(), self.overwrite
+                context.scene, self.filepath, self.export_format.lower(), self.overwrite,
+                filament_frame=self.filament_frame.lower(),
             )
         except (LookupError, OSError, ValueError) as error:  # PresetError is a ValueError
             self.report({"ERROR"}, f"Nothing exported: {error}")
             return {"CANCELLED"}
         label = preset_io.FORMATS[self.export_format.lower()][0]
-        self.report({"INFO"}, f"Exported SH lighting ({label}) to {path}")
+        self.report({"INFO"}, f"Exported {label} to {path}")
         return {"FINISHED"}
 
 

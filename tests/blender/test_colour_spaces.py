@@ -228,7 +228,7 @@ def test_exports_are_linear_rec709_and_presets_come_back(tmp_path, addon):
     written, _ = preset_io.read_preset_file(path)
     assert rel_err(written, rec709) < 1e-6
     three = json.loads(preset_io.export_preset(scene, tmp_path / "t.json", "threejs").read_text())
-    assert np.abs(np.array(three["sh"]) - to_threejs_sh(rec709)).max() < 1e-6 * np.abs(rec709).max()
+    assert np.abs(np.array(three["object"]["sh"]) - to_threejs_sh(rec709)).max() < 1e-6 * np.abs(rec709).max()
     api.set_coefficients(scene, np.zeros((9, 3)))
     preset_io.import_preset(scene, path)
     assert rel_err(scene_data.get_coefficients(scene), acescg) < 1e-9

@@ -45,11 +45,15 @@ def read_back(path, fmt):
         return interop.from_filament_sh_txt(text)
     data = json.loads(text)
     if fmt == "THREEJS":
-        assert data["type"] == "LightProbe" and data["intensity"] == 1.0
-        assert len(data["sh"]) == 27
-        return interop.from_threejs_sh(data["sh"])
-    assert data["intensity"] == 1.0 and data["rotation"] == [0.0, 0.0, 0.0, 1.0]
-    return interop.from_gltf_irradiance_coefficients(data["irradianceCoefficients"])
+        assert data["metadata"]["type"] == "Object"
+        probe = data["object"]
+        assert probe["type"] == "LightProbe" and probe["intensity"] == 1.0
+        assert len(probe["sh"]) == 27
+        return interop.from_threejs_sh(probe["sh"])
+    (light,) = data["extensions"]["EXT_lights_image_based"]["lights"]
+    assert light["intensity"] == 1.0 and light["rotation"] == [0.0, 0.0, 0.0, 1.0]
+    assert len(light["specularImages"]) == 4 and light["specularImageSize"] == 64
+    return interop.from_gltf_irradiance_coefficients(light["irradianceCoefficients"])
 
 
 def leftovers(folder):
@@ -92,10 +96,11 @@ def test_formats_differ_as_documented(scene, tmp_path):
     spot checks that the files are not all the same numbers."""
     for fmt in ("threejs", "gltf", "filament"):
         preset_io.export_preset(scene, tmp_path / f"x_{fmt}", fmt)
-    sh = json.loads((tmp_path / "x_threejs").read_text())["sh"]
+    sh = json.loads((tmp_path / "x_threejs").read_text())["object"]["sh"]
     # y-up: (x, y, z)_gltf = (x, z, -y)_blender, so L1-1 (y) of three.js is Blender's L10.
     assert_allclose(sh[3:6], KNOWN[2], atol=ROUND_TRIP)
-    gltf = json.loads((tmp_path / "x_gltf").read_text())["irradianceCoefficients"]
+    gltf = json.loads((tmp_path / "x_gltf").read_text())["extensions"]
+    gltf = gltf["EXT_lights_image_based"]["lights"][0]["irradianceCoefficients"]
     assert_allclose(gltf[0], math.pi * KNOWN[0], atol=ROUND_TRIP)  # Â_0 = π, sign +
     assert_allclose(gltf[3], -2.0 * math.pi / 3.0 * KNOWN[3], atol=ROUND_TRIP)  # L11: −Â_1
     lines = (tmp_path / "x_filament").read_text().splitlines()
@@ -150,7 +155,7 @@ def test_metadata_names_the_world_image_while_the_values_are_the_computed_ones(a
     assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
 
     metadata = read_preset(preset_io.export_preset(scene, tmp_path / "a.json"))[1]
-    assert metadata["source"] == str(exr)
+    assert metadata["source"] == "sky.exr"  # the file name only: no local path in shared files
     assert metadata["strength"] == 3.0 and metadata["mapping"] == [0.0, 0.0, 0.0]
 
     coeffs = scene_data.get_coefficients(scene)
@@ -461,7 +466,8 @@ def test_presets_sub_panels_sit_under_both_main_panels(addon):
     [
         ("FILAMENT", "/x/light.json", "/x/light.txt"),
         ("THREEJS", "/x/light.txt", "/x/light.json"),
-        ("GLTF", "/x/light", "/x/light.json"),
+        ("GLTF", "/x/light", "/x/light.gltf"),
+        ("GLTF", "/x/light.json", "/x/light.gltf"),
         ("SH_LIGHTING", "/x/light.v2", "/x/light.v2.json"),
         ("SH_LIGHTING", "/x/light.json", "/x/light.json"),
     ],

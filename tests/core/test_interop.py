@@ -15,6 +15,7 @@ from quadrature import random_directions
 
 from sh_lighting.core import irradiance, sh_basis, uv_to_direction
 from sh_lighting.core.interop import (
+    BLENDER_TO_BABYLON_LOOKUP,
     BLENDER_TO_CMGEN,
     coefficients_from_filament_prescaled,
     filament_prescaled,
@@ -118,9 +119,16 @@ def babylon_diffuse(rows, n, intensity=1.0):
 
 
 def test_gltf_rows_shown_by_babylon_give_lambertian_shading():
+    """At Babylon's lookup vector of a glTF normal in a right-handed scene, (x, y, −z): the
+    z flip of REFLECTIONMAP_OPPOSITEZ (Babylon's own loader and shader code are run on the
+    exported file in tests/interop)."""
     rows = to_gltf_irradiance_coefficients(COEFFS)
     assert len(rows) == 9 and all(len(r) == 3 for r in rows)
-    assert close(babylon_diffuse(rows, gltf(NORMALS)), irradiance(COEFFS, NORMALS) / pi)
+    lookup = gltf(NORMALS) * np.array([1.0, 1.0, -1.0])
+    assert close(babylon_diffuse(rows, lookup), irradiance(COEFFS, NORMALS) / pi)
+    assert close(lookup, NORMALS @ BLENDER_TO_BABYLON_LOOKUP.T)
+    # at the raw glTF normal it would be the mirror image: the z flip matters
+    assert not close(babylon_diffuse(rows, gltf(NORMALS)), irradiance(COEFFS, NORMALS) / pi)
 
 
 def test_gltf_rows_are_condon_shortley_signed_irradiance():

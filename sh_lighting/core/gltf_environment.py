@@ -1,0 +1,239 @@
+"""A complete glTF 2.0 ``EXT_lights_image_based`` environment, as Babylon.js reads it.
+
+One .gltf text (JSON, images embedded as ``data:image/png;base64`` URIs) holding one light
+attached to the scene: ``intensity`` 1, ``rotation`` identity, ``irradianceCoefficients``
+(``interop.to_gltf_irradiance_coefficients``), ``specularImageSize`` and ``specularImages``:
+a cube mip chain of ``levels`` levels of size S, S/2, ... prefiltered from the world image
+(``core.specular``). The facts it follows (the extension's README and schema, Babylon.js 9.28's
+loader and shaders; checked by running them in node, ``tests/interop``):
+
+* **Faces** are listed +X, −X, +Y, −Y, +Z, −Z in the axes Babylon looks the cube up with:
+  in a right-handed scene (x, y, −z) of the glTF world direction, i.e. (x, z, y)_blender
+  (``interop.BLENDER_TO_BABYLON_LOOKUP``; the same axes as the irradiance coefficients).
+  Inside a face, texel (column i, row j) of size s is the WebGL cube-map direction of
+  s_c = 2(i + ½)/s − 1 and t_c = 1 − 2(j + ½)/s (table 3.21 of the OpenGL ES 3.0 spec;
+  ``FACE_AXES``): Babylon uploads these images with ``UNPACK_FLIP_Y``, so the PNG's top
+  row is t = 1 (what the extension calls flipping each image for glTF's texture space).
+* **Roughness per level**: Babylon samples level lod = log2(S α)·(N − 1)/log2(S) for
+  α = r² + 0.0005 (r the material roughness), so level i holds the radiance prefiltered at
+  α_i = S^(i/(N−1)) / S (``level_alphas``): α = 1/S (mirror-like) at level 0, α = 1
+  (r = 1) at the last. The extension's README says instead that levels "evenly map to
+  roughness values from 0 to 1"; Babylon, its main reader, does not, and we follow Babylon.
+* **Encoding**: 4-channel PNGs hold RGBD (the extension), decoded by Babylon as
+  rgb = (c/255)^2.2 / (d/255); encoded as Babylon's ``toRGBD``: d = clamp(⌊255/max(r, g, b)⌋,
+  1, 255), c = round(255 (L d/255)^(1/2.2)). RGBD holds at most 255: brighter texels (an
+  HDRI's sun) are clipped there in the specular images (the diffuse light, from the
+  coefficients, is not affected); negative radiance is written as 0. ``intensity`` stays 1:
+  Babylon 9.28 multiplies the coefficients by it in its loader and the irradiance by it
+  again in its shader (``vReflectionInfos.x``), so any other value would scale its diffuse
+  light by intensity² but its reflections by intensity.
+"""
+
+import base64
+import json
+from math import log2
+
+import numpy as np
+
+from .equirect import check_pixels, texel_directions
+from .interop import BLENDER_TO_BABYLON_LOOKUP, to_gltf_irradiance_coefficients
+from .irradiance import check_coefficients
+from .png import png_bytes
+from .sh import sh_basis
+from .specular import (
+    SOURCE_TEXELS_PER_TEXEL,
+    bilinear_lookup,
+    downsample,
+    prefilter,
+    scatter_average,
+)
+from .world_map import mapping_rotation
+
+EXTENSION = "EXT_lights_image_based"
+CUBE_SIZE = 64  # S: the size of level 0
+LEVELS = 4  # 64, 32, 16, 8: the last (r = 1) at 8 × 8
+MINIMUM_VARIANCE = 0.0005  # Babylon's α = r² + 0.0005
+MIRROR_SUBSAMPLES = 4  # k × k bilinear lookups per level-0 texel for images coarser than it
+FACE_NAMES = ("px", "nx", "py", "ny", "pz", "nz")
+RGBD_GAMMA = 2.2
+RGBD_MAX = 255.0
+
+# Direction of texel (s_c, t_c) on each face: (major axis, axis of s_c, axis of t_c) as
+# coefficient vectors, d = major + s_c · s_axis + t_c · t_axis (WebGL cube-map table).
+FACE_AXES = np.array([
+    [[1, 0, 0], [0, 0, -1], [0, -1, 0]],   # +X: s_c = −z, t_c = −y
+    [[-1, 0, 0], [0, 0, 1], [0, -1, 0]],   # −X: s_c = +z, t_c = −y
+    [[0, 1, 0], [1, 0, 0], [0, 0, 1]],     # +Y: s_c = +x, t_c = +z
+    [[0, -1, 0], [1, 0, 0], [0, 0, -1]],   # −Y: s_c = +x, t_c = −z
+    [[0, 0, 1], [1, 0, 0], [0, -1, 0]],    # +Z: s_c = +x, t_c = −y
+    [[0, 0, -1], [-1, 0, 0], [0, -1, 0]],  # −Z: s_c = −x, t_c = −y
+], dtype=np.float64)
+
+
+def level_alphas(size=CUBE_SIZE, levels=LEVELS):
+    """α Babylon samples each level at: S^(i/(N−1)) / S, i = 0 … N − 1 (module docstring)."""
+    if levels == 1:
+        return np.array([1.0 / size])
+    return size ** (np.arange(levels) / (levels - 1)) / size
+
+
+def level_roughness(size=CUBE_SIZE, levels=LEVELS):
+    """The material roughness r whose reflections Babylon reads from each level."""
+    return np.sqrt(np.maximum(level_alphas(size, levels) - MINIMUM_VARIANCE, 0.0))
+
+
+def face_lookup_directions(face, size, u=None, v=None):
+    """Unit lookup directions (Babylon's cube axes) of face ``face`` (0-5), (size, size, 3).
+
+    ``u``, ``v``: texel coordinates in [0, size) (column, row from the top) instead of the
+    texel centres.
+    """
+    if u is None:
+        v, u = np.meshgrid(np.arange(size) + 0.5, np.arange(size) + 0.5, indexing="ij")
+    sc = 2.0 * np.asarray(u) / size - 1.0
+    tc = 1.0 - 2.0 * np.asarray(v) / size
+    major, s_axis, t_axis = FACE_AXES[face]
+    d = major + sc[..., None] * s_axis + tc[..., None] * t_axis
+    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def face_directions(face, size, u=None, v=None):
+    """The same texels' directions in Blender world axes (x, y, z)_blender."""
+    return face_lookup_directions(face, size, u, v) @ BLENDER_TO_BABYLON_LOOKUP
+
+
+def cube_texel_index(directions, size):
+    """Flat index face·s² + row·s + column of the texel holding each Blender direction."""
+    d = np.asarray(directions, dtype=np.float64) @ BLENDER_TO_BABYLON_LOOKUP.T
+    axis = np.argmax(np.abs(d), axis=-1)
+    negative = np.take_along_axis(d, axis[..., None], -1)[..., 0] < 0
+    face = 2 * axis + negative
+    axes = FACE_AXES[face]  # (..., 3, 3): major, s axis, t axis
+    major = np.abs(np.take_along_axis(d, axis[..., None], -1)[..., 0])
+    sc = np.einsum("...i,...i->...", d, axes[..., 1, :]) / major
+    tc = np.einsum("...i,...i->...", d, axes[..., 2, :]) / major
+    col = np.clip(((sc + 1.0) * 0.5 * size).astype(np.int64), 0, size - 1)
+    row = np.clip(((1.0 - tc) * 0.5 * size).astype(np.int64), 0, size - 1)
+    return (face * size + row) * size + col
+
+
+def specular_cube(pixels, size=CUBE_SIZE, levels=LEVELS, strength=1.0, euler=None):
+    """The prefiltered mip chain: a list of ``levels`` arrays (6, s, s, 3) of linear radiance,
+    faces in glTF order, rows as in the PNG (top first).
+
+    ``pixels``: the equirect image shown by the world at ``strength`` through a Mapping node
+    of XYZ Euler ``euler`` (``world_map``; None: no Mapping node).
+    """
+    check_pixels(pixels)
+    pixels = np.asarray(pixels, dtype=np.float64)[..., :3] * float(strength)
+    to_world = mapping_rotation(euler)  # world direction = to_world @ image direction
+    if size < 2 or size & (size - 1) or not 1 <= levels <= int(log2(size)) + 1:
+        raise ValueError(
+            f"a specular cube needs a power-of-two size ≥ 2 and 1 … log2(size) + 1 levels, "
+            f"got size {size} with {levels} levels"
+        )
+    # the source of the GGX levels, downsampled once for the largest of them (level 1)
+    width = SOURCE_TEXELS_PER_TEXEL * size // 2
+    source = downsample(pixels, width // 2, width)
+    chain = []
+    for level, alpha in enumerate(level_alphas(size, levels)):
+        s = size >> level
+        if level == 0:
+            faces = _mirror_level(pixels, s, to_world)
+        else:
+            directions = np.stack([face_directions(f, s) for f in range(6)])
+            faces = prefilter(source, directions @ to_world, alpha, SOURCE_TEXELS_PER_TEXEL * s)
+        chain.append(np.asarray(faces, dtype=np.float64))
+    return chain
+
+
+def _mirror_level(pixels, s, to_world):
+    """Level 0 (α = 1/S): each cube texel's mean of the image (``core.specular``)."""
+    if pixels.shape[0] >= 4 * s:  # image texels at most half a cube texel: average them
+        return scatter_average(
+            pixels, lambda d: cube_texel_index(d @ to_world.T, s), 6 * s * s
+        ).reshape(6, s, s, 3)
+    offsets = (np.arange(MIRROR_SUBSAMPLES) + 0.5) / MIRROR_SUBSAMPLES
+    v = np.arange(s)[:, None, None, None] + offsets[None, None, :, None]
+    u = np.arange(s)[None, :, None, None] + offsets[None, None, None, :]
+    u, v = np.broadcast_arrays(u, v)
+    faces = [
+        bilinear_lookup(pixels, face_directions(face, s, u, v) @ to_world).mean(axis=(2, 3))
+        for face in range(6)
+    ]
+    return np.stack(faces)
+
+
+def rgbd_encode(radiance):
+    """(..., 3) linear radiance → (..., 4) uint8 RGBD as Babylon's ``toRGBD`` writes it."""
+    c = np.clip(np.nan_to_num(np.asarray(radiance, dtype=np.float64), nan=0.0), 0.0, RGBD_MAX)
+    peak = np.maximum(c.max(axis=-1, keepdims=True), 1e-7)
+    d = np.clip(np.floor(RGBD_MAX / peak), 1.0, 255.0)
+    rgb = np.clip(c * d / 255.0, 0.0, 1.0) ** (1.0 / RGBD_GAMMA)
+    return np.concatenate([np.round(rgb * 255.0), d], axis=-1).astype(np.uint8)
+
+
+def rgbd_decode(rgbd):
+    """(..., 4) uint8 RGBD → (..., 3) linear radiance, as Babylon's ``fromRGBD`` reads it."""
+    a = np.asarray(rgbd, dtype=np.float64) / 255.0
+    return a[..., :3] ** RGBD_GAMMA / a[..., 3:4]
+
+
+def radiance_image(coeffs, height=64, width=128):
+    """An equirect image (H, W, 3) of the 9-term radiance Σ L_lm Y_lm, negative parts 0:
+    the specular source when there is no world image (edited or loaded coefficients)."""
+    c, _order = check_coefficients(coeffs)
+    return np.maximum(sh_basis(texel_directions(height, width)) @ c, 0.0)
+
+
+def _data_uri(png):
+    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+
+def gltf_document(coeffs, pixels=None, strength=1.0, euler=None, name="", extras=None,
+                  size=CUBE_SIZE, levels=LEVELS):
+    """The glTF JSON object (dict) of the environment of ``coeffs`` and its world image.
+
+    ``pixels``: the equirect world image (H, W, 3 or 4), rows top to bottom, shown at
+    ``strength`` through ``euler`` (``specular_cube``); None: the specular cube is made from
+    ``radiance_image(coeffs)`` (then ``strength`` and ``euler`` are not used).
+    """
+    if pixels is None:
+        pixels, strength, euler = radiance_image(coeffs), 1.0, None
+    chain = specular_cube(pixels, size, levels, strength, euler)
+    irradiance = to_gltf_irradiance_coefficients(coeffs)
+    images, indices = [], []
+    for level, faces in enumerate(chain):
+        row = []
+        for face, texels in zip(FACE_NAMES, faces):
+            row.append(len(images))
+            images.append({
+                "name": f"specular_{level}_{face}",
+                "uri": _data_uri(png_bytes(rgbd_encode(texels))),
+            })
+        indices.append(row)
+    light = {
+        "name": name or "environment",
+        "intensity": 1.0,
+        "rotation": [0.0, 0.0, 0.0, 1.0],
+        "irradianceCoefficients": irradiance,
+        "specularImageSize": size,
+        "specularImages": indices,
+    }
+    if extras:
+        light["extras"] = dict(extras)
+    return {
+        "asset": {"version": "2.0", "generator": "sh_lighting"},
+        "extensionsUsed": [EXTENSION],
+        "extensions": {EXTENSION: {"lights": [light]}},
+        "scene": 0,
+        "scenes": [{"name": name or "environment", "extensions": {EXTENSION: {"light": 0}}}],
+        "images": images,
+    }
+
+
+def gltf_text(coeffs, pixels=None, strength=1.0, euler=None, name="", extras=None,
+              size=CUBE_SIZE, levels=LEVELS):
+    """:func:`gltf_document` as the text of a .gltf file."""
+    document = gltf_document(coeffs, pixels, strength, euler, name, extras, size, levels)
+    return json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False) + "\n"

@@ -1,0 +1,128 @@
+"""GGX-prefiltered specular radiance from an equirectangular image (glTF environment export).
+
+A glossy surface lit by an environment reflects, in the mirror direction R, the radiance
+prefiltered with its microfacet distribution. With the split-sum approximation and n = v = R
+(Karis, "Real Shading in Unreal Engine 4", SIGGRAPH 2013 course notes, eq. 4 and its
+"n = v = r" assumption), the prefiltered radiance at roughness α (α = GGX's α, the
+square of a material's perceptual roughness) is
+
+    P_α(R) = ∫ L(ω) D_α(h) max(R·ω, 0) dω / ∫ D_α(h) max(R·ω, 0) dω,   h = (R + ω)/|R + ω|,
+
+with D_α the GGX (Trowbridge-Reitz) distribution α² / (π ((R·h)² (α² − 1) + 1)²); here
+(R·h)² = (1 + R·ω)/2, so only R·ω is needed. It is evaluated as a deterministic sum over the
+texels of the image, box-downsampled (each texel's radiance weighted by its exact solid angle)
+to ``SOURCE_TEXELS_PER_TEXEL`` × the output resolution. For α no larger than a texel of the
+output (the sharpest level) the sum is replaced by the mean of the full image over each output
+texel, which is what a mirror shows at that resolution: the solid-angle-weighted mean of the
+image texels inside it (``scatter_average``) when the image is finer than the output, else
+the mean of bilinear lookups at k × k points of it (``bilinear_lookup``). Pure numpy;
+directions are Blender world axes (z up), pixels rows top to bottom (``equirect``).
+``benchmarks/bench_specular.py`` measures the cost.
+"""
+
+from math import pi
+
+import numpy as np
+
+from .equirect import check_pixels, direction_to_uv, texel_directions, texel_solid_angles
+
+# Columns of the downsampled source per output texel along a great circle: a cube face of size
+# s spans π/2, so 4s columns over 2π give the source texel the output texel's angular size.
+SOURCE_TEXELS_PER_TEXEL = 4
+_CHUNK = 1 << 22  # output directions × source texels per matrix product (32 MiB in float64)
+
+
+def ggx_distribution(alpha, cos_h_squared):
+    """GGX / Trowbridge-Reitz D(h) = α² / (π ((n·h)²(α² − 1) + 1)²), given (n·h)² as a
+    float array (the result has its dtype: float32 in ``prefilter``)."""
+    c = np.asarray(cos_h_squared)
+    a2 = c.dtype.type(float(alpha) ** 2)
+    return a2 / (c.dtype.type(pi) * (c * (a2 - 1) + 1) ** 2)
+
+
+def downsample(pixels, height, width):
+    """The image box-averaged to (height, width) texels, each texel weighted by its solid angle.
+
+    ``pixels``: (H, W, 3) with H ≥ height, W ≥ width; returns (height, width, 3) float64.
+    """
+    p = np.asarray(pixels, dtype=np.float64)[..., :3]
+    h, w = p.shape[:2]
+    if height > h or width > w:
+        return p.copy()
+    weights = texel_solid_angles(h, w)[:, None, None]
+    rows = (np.arange(height) * h) // height
+    cols = (np.arange(width) * w) // width
+    summed = np.add.reduceat(np.add.reduceat(p * weights, rows, axis=0), cols, axis=1)
+    area = np.add.reduceat(np.broadcast_to(weights, (h, 1, 1)), rows, axis=0)
+    counts = np.diff(np.append(cols, w))[None, :, None]
+    return summed / (area * counts)
+
+
+def scatter_average(pixels, texel_index, count):
+    """Solid-angle-weighted mean of the image texels inside each of ``count`` output texels.
+
+    Each image texel goes, with its exact solid angle, to the output texel
+    ``texel_index(directions)`` (flat indices) that holds its centre, so no texel is skipped;
+    meant for images whose texels are at most half an output texel (else some output texels
+    get none and are 0: use ``bilinear_lookup``). Returns (count, 3) float64.
+    """
+    p = np.asarray(pixels, dtype=np.float64)[..., :3]
+    h, w = p.shape[:2]
+    total = np.zeros((count, 3))
+    weight = np.zeros(count)
+    rows_per_chunk = max(1, (1 << 20) // w)
+    for r0 in range(0, h, rows_per_chunk):
+        r1 = min(h, r0 + rows_per_chunk)
+        index = texel_index(texel_directions(h, w, rows=slice(r0, r1)).reshape(-1, 3))
+        solid = np.repeat(texel_solid_angles(h, w)[r0:r1], w)
+        weight += np.bincount(index, solid, minlength=count)
+        radiance = p[r0:r1].reshape(-1, 3)
+        for c in range(3):
+            total[:, c] += np.bincount(index, radiance[:, c] * solid, minlength=count)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(weight[:, None] > 0, total / weight[:, None], 0.0)
+
+
+def bilinear_lookup(pixels, directions):
+    """The image bilinearly interpolated at unit Blender ``directions`` (..., 3) → (..., 3).
+
+    Texel centres as in ``equirect``; columns wrap around, rows are clamped at the poles.
+    """
+    p = np.asarray(pixels, dtype=np.float64)[..., :3]
+    h, w = p.shape[:2]
+    u, v = direction_to_uv(directions)
+    x = u * w - 0.5
+    y = np.clip((1.0 - v) * h - 0.5, 0.0, h - 1.0)
+    x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
+    fx, fy = (x - x0)[..., None], (y - y0)[..., None]
+    x0, x1 = x0 % w, (x0 + 1) % w
+    y1 = np.minimum(y0 + 1, h - 1)
+    top = p[y0, x0] * (1.0 - fx) + p[y0, x1] * fx
+    bottom = p[y1, x0] * (1.0 - fx) + p[y1, x1] * fx
+    return top * (1.0 - fy) + bottom * fy
+
+
+def prefilter(pixels, directions, alpha, source_width):
+    """P_α (module docstring) at unit Blender ``directions`` (..., 3) → (..., 3) float64.
+
+    The sum runs over the image downsampled to ``source_width`` × ``source_width``/2 texels
+    (the image itself if it is not larger).
+    """
+    check_pixels(pixels)
+    source = downsample(pixels, max(1, source_width // 2), source_width)
+    h, w = source.shape[:2]
+    omega = texel_directions(h, w).reshape(-1, 3)
+    radiance = source.reshape(-1, 3)
+    solid = np.repeat(texel_solid_angles(h, w), w)
+    d = np.asarray(directions, dtype=np.float64)
+    flat = d.reshape(-1, 3).astype(np.float32)
+    omega, solid = omega.astype(np.float32), solid.astype(np.float32)
+    out = np.empty((flat.shape[0], 3))
+    step = max(1, _CHUNK // omega.shape[0])
+    for start in range(0, flat.shape[0], step):  # float32 weights: 1e-7 of a sum of them
+        cos_rl = flat[start:start + step] @ omega.T
+        weight = ggx_distribution(alpha, np.float32(0.5) * (np.float32(1.0) + cos_rl))
+        weight *= np.maximum(cos_rl, np.float32(0.0)) * solid
+        out[start:start + step] = (weight @ radiance) / weight.sum(axis=1, keepdims=True,
+                                                                    dtype=np.float64)
+    return out.reshape(d.shape)

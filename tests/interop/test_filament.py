@@ -1,0 +1,74 @@
+"""Our sh.txt as Filament reads and shades it (no node: Filament's npm package does not run here).
+
+Filament's npm package is a WebAssembly build for browsers: in node 20 ``Filament.init`` never
+calls back (it fetches its .wasm as a web page would) and an Engine needs a WebGL2 canvas, so
+its own code cannot be run in these tests. What is run instead, from Filament's source as text
+facts (google/filament):
+
+* the reader: ``libs/filamentapp/src/IBL.cpp`` reads sh.txt line by line with
+  ``sscanf(line, "(%f,%f,%f)", &r, &g, &b)`` into floats — here the C library's own sscanf
+  through ctypes, with that format;
+* the shader: ``Irradiance_SphericalHarmonics(n)`` (shaders/src light_indirect.fs) returns
+  max(sh0 + sh1 n.y + sh2 n.z + sh3 n.x + sh4 n.y n.x + sh5 n.y n.z + sh6 (3 n.z² − 1)
+  + sh7 n.z n.x + sh8 (n.x² − n.y²), 0), the diffuse colour times it being the Lambertian
+  result (Fd_Lambert's 1/π is in the pre-scaled values) — evaluated here in float32.
+
+The normals are given in the frame of the file: cmgen's (x, y, z)_cmgen = (y, z, x)_blender
+or glTF's. The clamp at 0 is applied to both sides (our E(n)/π may dip below 0 for the
+signed lighting).
+"""
+
+import ctypes
+import ctypes.util
+
+import numpy as np
+import pytest
+from lightings import NAMES, NORMALS, TOLERANCE, expected, lighting
+
+from sh_lighting.blender import preset_io
+from sh_lighting.core.interop import BLENDER_TO_CMGEN
+from sh_lighting.core.frames import BLENDER_TO_Y_UP
+
+LIBC = ctypes.CDLL(ctypes.util.find_library("c"))
+FRAMES = {"cmgen": BLENDER_TO_CMGEN, "gltf": BLENDER_TO_Y_UP}
+
+
+def filament_reads(text):
+    """IBL.cpp's loop: 9 lines, each parsed by sscanf "(%f,%f,%f)" (3 conversions or fail)."""
+    bands = []
+    for line in text.splitlines()[:9]:
+        r, g, b = ctypes.c_float(), ctypes.c_float(), ctypes.c_float()
+        n = LIBC.sscanf(line.encode(), b"(%f,%f,%f)", ctypes.byref(r), ctypes.byref(g),
+                        ctypes.byref(b))
+        assert n == 3, f"Filament's sscanf read {n} values from {line!r}"
+        bands.append([r.value, g.value, b.value])
+    return np.array(bands, dtype=np.float32)
+
+
+def filament_shades(sh, n):
+    sh = sh.astype(np.float32)
+    x, y, z = (n[:, i, None].astype(np.float32) for i in range(3))
+    one, three = np.float32(1.0), np.float32(3.0)
+    return np.maximum(
+        sh[0] + sh[1] * y + sh[2] * z + sh[3] * x + sh[4] * (y * x) + sh[5] * (y * z)
+        + sh[6] * (three * z * z - one) + sh[7] * (z * x) + sh[8] * (x * x - y * y),
+        np.float32(0.0),
+    )
+
+
+@pytest.mark.parametrize("frame", FRAMES)
+@pytest.mark.parametrize("name", NAMES)
+def test_filament_reads_and_shades_our_sh_txt(tmp_path, name, frame):
+    coeffs = lighting(name)[0]
+    path = preset_io.export_coefficients(coeffs, tmp_path / "sh.txt", "filament",
+                                         filament_frame=frame)
+    shown = filament_shades(filament_reads(path.read_text()), NORMALS @ FRAMES[frame].T)
+    ours = np.maximum(expected(coeffs), 0.0)
+    d = float(np.abs(shown - ours).max() / np.abs(ours).max())
+    print(f"Filament ({frame} frame) {name}: {d:.3g} of the peak")
+    assert d <= TOLERANCE
+
+
+def test_the_reader_check_can_fail():
+    with pytest.raises(AssertionError, match="read 1 values"):
+        filament_reads("(1.0; 2.0, 3.0);\n")
