@@ -82,36 +82,6 @@ def _print(*args, **kwargs):
 # --- shared helpers --------------------------------------------------------------------------
 
 
-def coefficient_table(coeffs):
-    """The lines of the coefficient table: name, R, G, B and what the coefficient does."""
-    from .core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES as phrases
-
-    lines = [f"{'':5} {'R':>11} {'G':>11} {'B':>11}   what it does"]
-    for name, rgb, phrase in zip(COEFFICIENT_NAMES, coeffs, phrases):
-        lines.append(f"{name:5} {rgb[0]:11.5f} {rgb[1]:11.5f} {rgb[2]:11.5f}   {phrase}")
-    return lines
-
-
-def error_estimate(pixels, coeffs, count=ERROR_NORMALS):
-    """{"mean", "max"} 9-term irradiance error / total power ∫L dω, or None (no power).
-
-    The paper's measure (``core.irradiance.relative_error``): |E9 − E| at ``count`` normals
-    (``spread_normals``), divided per channel by the channel's power 2√π L00; mean is the worst
-    channel's mean, max the largest over normals and channels.
-    """
-    from .core.irradiance import irradiance, reference_irradiance, relative_error, total_power
-    from .core.sh import spread_normals
-
-    power = total_power(coeffs)
-    if not (power > 0.0).all():
-        return None
-    normals = spread_normals(count)
-    mean, largest = relative_error(
-        irradiance(coeffs, normals), reference_irradiance(pixels, normals), power
-    )
-    return {"mean": mean, "max": largest}
-
-
 @contextmanager
 def library_output_captured():
     """Send what C libraries print on stderr (file descriptor 2) during the block to a
@@ -141,6 +111,7 @@ def hdri_coefficients(path, nonfinite="raise", keep_pixels=False):
 
     from .core.coefficients import check_coefficients
     from .core.equirect import NonFiniteError
+    from .core.irradiance import error_estimate
     from .core.projection import project_equirect
 
     images = _module("blender.images")
@@ -165,7 +136,7 @@ def hdri_coefficients(path, nonfinite="raise", keep_pixels=False):
         "created": date.today().isoformat(),
         "notes": f"Projected exactly from the {pixels.shape[1]}x{pixels.shape[0]} image.",
     }
-    estimate = error_estimate(pixels, coeffs)
+    estimate = error_estimate(pixels, coeffs, ERROR_NORMALS)
     if estimate is not None:
         metadata["error_estimate"] = estimate
         metadata["notes"] += (
@@ -315,6 +286,8 @@ def save_blend(path, overwrite):
 
 
 def cmd_compute(args):
+    from .core.sh import coefficient_table
+
     preset_io = _module("blender.preset_io")
     is_blend = args.input is None or Path(args.input).suffix.lower() == ".blend"
     if args.input is not None:

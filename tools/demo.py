@@ -17,7 +17,7 @@ import bpy
 import numpy as np
 
 from sh_lighting.blender.images import load_image_pixels
-from sh_lighting.cli import coefficient_table
+from sh_lighting.core.sh import coefficient_table
 from sh_lighting.core import (
     COEFFICIENT_NAMES,
     irradiance,

@@ -8,7 +8,7 @@ Usage: python -m tools.make_presets [--no-hdri]
 * The 8 HDRIs that ship with Blender (studiolights/world: city, courtyard, forest, interior,
   night, studio, sunrise, sunset), projected exactly with ``project_equirect``, each with its
   9-term error estimate against the exact irradiance (``reference_irradiance``) at 512 normals
-  (``sh_lighting.cli.error_estimate``, the same measure as ``compute``).
+  (``sh_lighting.core.irradiance.error_estimate``, the same measure as ``compute``).
   Needs the ``bpy`` module; skipped with ``--no-hdri``.
 
 Existing preset files are replaced. The files carry no creation date, so regenerating them
@@ -61,7 +61,7 @@ def hdri_presets():
     import bpy
 
     from sh_lighting.blender.images import load_image_pixels
-    from sh_lighting.cli import error_estimate
+    from sh_lighting.core.irradiance import error_estimate
     from sh_lighting.core import project_equirect
 
     folder = Path(bpy.utils.system_resource("DATAFILES", path="studiolights/world"))

@@ -17,7 +17,7 @@ import numpy as np
 
 from .coefficients import check_coefficients as checked_coefficients
 from .equirect import check_finite_pixels, check_pixels, texel_directions, texel_solid_angles
-from .sh import band_of_each_coefficient, lambert_band_factors, order_of, sh_basis
+from .sh import band_of_each_coefficient, lambert_band_factors, order_of, sh_basis, spread_normals
 
 # Eq. 13's constants, in closed form (the paper prints them rounded to 6 digits).
 A0, A1, A2 = lambert_band_factors(2)
@@ -140,3 +140,23 @@ def relative_error(estimate, reference, power):
     """
     err = error_over_power(estimate, reference, power)
     return float(err.mean(axis=0).max()), float(err.max())
+
+
+def error_estimate(pixels, coeffs, count=256):
+    """{"mean", "max"} 9-term irradiance error / total power ∫L dω of an equirect map, or
+    None (a channel without light).
+
+    The paper's measure (``relative_error``): |E9 − E| at ``count`` normals
+    (``sh.spread_normals``) against the brute-force ``reference_irradiance`` (eq. 1) of
+    ``pixels``, divided per channel by the channel's power 2√π L00; mean is the worst
+    channel's mean, max the largest over normals and channels. The command line's and the
+    preset builder's estimate.
+    """
+    power = total_power(coeffs)
+    if not (power > 0.0).all():
+        return None
+    normals = spread_normals(count)
+    mean, largest = relative_error(
+        irradiance(coeffs, normals), reference_irradiance(pixels, normals), power
+    )
+    return {"mean": mean, "max": largest}

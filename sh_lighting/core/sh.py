@@ -40,6 +40,14 @@ COEFFICIENT_PHRASES = (
 )
 
 
+
+def coefficient_table(coeffs):
+    """Text lines of a (9, 3) coefficient table: name, R, G, B and what each coefficient does."""
+    lines = [f"{'':5} {'R':>11} {'G':>11} {'B':>11}   what it does"]
+    for name, rgb, phrase in zip(COEFFICIENT_NAMES, coeffs, COEFFICIENT_PHRASES):
+        lines.append(f"{name:5} {rgb[0]:11.5f} {rgb[1]:11.5f} {rgb[2]:11.5f}   {phrase}")
+    return lines
+
 def sh_index(l, m):
     """Position of Y_lm in a coefficient array: l(l+1) + m."""
     return l * (l + 1) + m

@@ -376,6 +376,23 @@ def test_apply_reports_objects_without_a_material(addon):
                         "have no material (Bare, Empty Slot): give them a material first")]
 
 
+def test_cli_apply_reports_objects_without_a_material(addon, tmp_path, capsys):
+    from sh_lighting import cli
+
+    two_objects_with_materials()
+    scene = bpy.context.scene
+    scene.collection.objects.link(bpy.data.objects.new("Bare", bpy.data.meshes.new("Bare")))
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "shot.blend"))
+    preset = tmp_path / "known.json"
+    from sh_lighting.core.presets import write_preset
+
+    write_preset(preset, KNOWN)
+    assert cli.main(["apply", str(preset), "--out", str(tmp_path / "out.blend")]) == 0
+    out = capsys.readouterr().out
+    assert "skipped object 'Bare': it has no material" in out
+    assert "applied to 2 material(s)" in out
+
+
 def test_apply_polls_explain_why_disabled(addon):
     scene = bpy.context.scene
     two_objects_with_materials()

@@ -149,3 +149,21 @@ def test_universal_error_bounds_on_random_non_negative_maps():
         assert (irradiance(coeffs, n) / power).min() >= -0.0396
         worst = max(worst, err.max())
     assert worst > 0.08  # near the bound (measured 8.2–8.7 % of P), not far below it
+
+
+def test_error_estimate_of_a_map_the_nine_terms_cannot_hold():
+    """A constant map: E is exact with L00 alone (estimate ~0); one bright texel (a delta):
+    the 9-term error reaches the universal bound 3/32 of the power only at its horizon, and
+    is large compared with the constant map's. A black channel gives None."""
+    from sh_lighting.core.irradiance import error_estimate
+
+    constant = np.full((32, 64, 3), 0.5)
+    flat = error_estimate(constant, project_equirect(constant), 512)
+    assert flat["max"] < 1e-3
+    delta = constant * 1e-3
+    delta[5, 20] = 1e3
+    spiky = error_estimate(delta, project_equirect(delta), 512)
+    assert 0.05 < spiky["max"] <= 3 / 32 + 0.01 and spiky["mean"] < spiky["max"]
+    black = constant.copy()
+    black[..., 2] = 0.0
+    assert error_estimate(black, project_equirect(black)) is None

@@ -74,3 +74,13 @@ def test_bad_directions_and_orders():
         sh_basis(np.zeros((4, 2)))
     with pytest.raises(ValueError, match="max_order"):
         sh_basis(np.zeros(3), -1)
+
+
+def test_coefficient_table_names_and_words_each_row():
+    from sh_lighting.core.sh import COEFFICIENT_PHRASES, coefficient_table
+
+    coeffs = np.arange(27.0).reshape(9, 3) - 13.0
+    lines = coefficient_table(coeffs)
+    assert len(lines) == 10 and lines[0].split() == ["R", "G", "B", "what", "it", "does"]
+    assert lines[3].split()[:4] == ["L10", "-7.00000", "-6.00000", "-5.00000"]
+    assert lines[3].endswith("light from above vs below") and len(COEFFICIENT_PHRASES) == 9
