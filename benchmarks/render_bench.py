@@ -140,7 +140,7 @@ class SphereScene:
             self.scene.eevee.taa_render_samples = samples
 
     def set_sh(self, coeffs):
-        result = materials.apply_to_materials([self.materials["sh"]], self.scene)
+        result = materials.apply_to_materials([self.materials["sh"]], self.scene, mode="EMISSION")
         if result.changed != [self.materials["sh"].name]:
             raise RuntimeError(f"could not apply the SH group: {result}")
         scene_data.store(self.scene, coeffs, {"source": "SCRIPT"})

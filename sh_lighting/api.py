@@ -47,6 +47,7 @@ from .blender.preset_io import (  # presets and interop: JSON, three.js, glTF, F
     user_presets,
 )
 from .blender import compute as _compute
+from .blender import lights as _lights
 from .blender import materials as _materials
 from .blender import nodes as _nodes
 from .blender import scene_data as _scene_data
@@ -66,7 +67,16 @@ __all__ = [
     # lighting design
     "DesignError", "rotate", "match_mapping", "exposure", "saturation", "band_gains",
     "flip_vertical", "apply_window", "split_sun", "describe", "negative_warning",
+    "extract_lights",
 ]
+
+
+def extract_lights(scene, count=3, error_target=None):
+    """Take up to ``count`` compact bright sources of the world image out as Sun lights and
+    store the coefficients of the rest (``blender.lights``); an ``error_target`` (fraction of
+    the world's light) stops earlier. Earlier extracted lights are updated or deleted, and
+    Reset / Compute from World delete them. Returns a ``LightsInfo``."""
+    return _lights.extract_lights(scene, count, error_target)
 
 
 def compute_from_world(scene, capture_width=None):
@@ -78,7 +88,9 @@ def compute_from_world(scene, capture_width=None):
     values, and the scene records where it came from (``get_provenance``). Returns the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
     user-facing message, leaving the scene unchanged, when the world cannot be read.
     """
-    return _compute.compute_and_store(scene, capture_width)[0]
+    coeffs = _compute.compute_and_store(scene, capture_width)[0]
+    _lights.remove_lights(scene)  # the whole world is in the SH again: no extracted light
+    return coeffs
 
 
 def get_coefficients(scene):
@@ -114,7 +126,9 @@ def reset(scene):
 
     A LookupError if nothing was computed yet. Returns the restored (9, 3) array.
     """
-    return _scene_data.reset(scene)
+    coeffs = _scene_data.reset(scene)
+    _lights.remove_lights(scene)  # the whole world is in the SH again: no extracted light
+    return coeffs
 
 
 def ensure_node_group():
@@ -123,18 +137,21 @@ def ensure_node_group():
     return _nodes.ensure_node_group()
 
 
-def apply_to_materials(materials, scene=None):
+def apply_to_materials(materials, scene=None, mode=_materials.DEFAULT_MODE):
     """Add SH irradiance lighting to ``materials`` (any iterable of Material), using the
-    coefficients of ``scene`` (default: the context scene). Returns which materials were
-    changed and which were skipped, with reasons.
+    coefficients of ``scene`` (default: the context scene). ``mode``: "KEEP_BSDF" (default:
+    the BSDF stays, SH replaces the world's diffuse light, which Cycles then no longer gives
+    to diffuse rays) or "EMISSION" (the SH emission alone). Returns which materials were
+    changed and which were skipped, with reasons; a ValueError for an unknown mode.
     """
     if scene is None:
         scene = bpy.context.scene
-    return _materials.apply_to_materials(_material_list(materials), scene)
+    return _materials.apply_to_materials(_material_list(materials), scene, mode)
 
 
 def remove_from_materials(materials):
-    """Undo ``apply_to_materials`` on ``materials``; returns which were changed or skipped."""
+    """Undo ``apply_to_materials`` on ``materials`` (and give the worlds their diffuse
+    visibility back once no material keeps its BSDF); returns which were changed or skipped."""
     return _materials.remove_from_materials(_material_list(materials))
 
 

@@ -24,9 +24,10 @@ inputs, and a path starting with ``//`` is relative to the .blend's folder, as i
   table and, with ``--out``, writes a preset (an HDRI's preset carries its 9-term error
   estimate) or a file for three.js, glTF (a .gltf environment with a specular cube from the
   image) or Filament.
-* ``apply PRESET [BLEND] (--out NEW.blend | --in-place) [--objects NAME ...] [--overwrite]``:
-  sets the coefficients and applies the SH node group to the materials of all (or the named)
-  objects of the scene, then saves. An output is required: ``--out`` (refused if it exists,
+* ``apply PRESET [BLEND] (--out NEW.blend | --in-place) [--objects NAME ...] [--overwrite]
+  [--mode KEEP_BSDF|EMISSION]``: sets the coefficients and applies the SH node group to the
+  materials of all (or the named) objects of the scene (keeping their BSDF, or as emission
+  only), then saves. An output is required: ``--out`` (refused if it exists,
   unless ``--overwrite``; never the input itself) or ``--in-place`` (replaces the input).
 * ``render [BLEND] --output PATH [--frame N | --frames A B] [--engine E] [--samples N]``:
   renders frames headless; PATH follows Blender's ``-o`` rules (``#`` → frame number, else 4
@@ -45,6 +46,7 @@ arguments or when the package cannot be found. Errors go to stderr as ``sh_light
 import argparse
 import fnmatch
 import importlib
+import math
 import os
 import sys
 import tempfile
@@ -318,7 +320,11 @@ def cmd_compute(args):
     else:
         coeffs, metadata, pixels = hdri_coefficients(source, args.nonfinite, keep_pixels=True)
         environment = (pixels, 1.0, None)
+        scene = None
         _print(f"HDRI {source}")
+    if args.lights is not None:
+        coeffs = extract_lights(source, scene, args.lights, metadata,
+                                getattr(args, "nonfinite", "raise"))
     elapsed = time.perf_counter() - start
     _print("Lighting coefficients L_lm (raw radiance, Blender world axes, z up):")
     for line in coefficient_table(coeffs):
@@ -386,7 +392,7 @@ def cmd_apply(args):
     preset_io = _module("blender.preset_io")
     provenance = preset_io.preset_provenance(preset, {})
     api.set_coefficients(scene, preset_io.from_preset_space(coeffs), provenance)
-    result = api.apply_to_materials(operators.materials_of(objects), scene)
+    result = api.apply_to_materials(operators.materials_of(objects), scene, args.mode)
     for name, reason in result.skipped:
         _print(f"skipped material '{name}': {reason}")
     for name in operators.objects_without_material(objects):
@@ -626,6 +632,71 @@ def _add_nonfinite(parser):
                         "or treat them as black (zero)")
 
 
+def _add_lights_option(parser):
+    """``compute --lights K``: extract up to K lights; the coefficients hold the rest."""
+    parser.add_argument(
+        "--lights", type=int, metavar="K", choices=range(0, 9),
+        help="take up to K (0-8) compact bright sources out of the world image as Sun lights "
+        "(printed); the coefficients (and --out) then hold the rest of the world")
+
+
+def extract_lights(source, scene, count, metadata, nonfinite="raise"):
+    """Up to ``count`` lights out of the HDRI ``source`` (``scene`` None) or the world of the
+    opened ``scene``; prints them, notes them in ``metadata``, returns the rest's (9, 3).
+    ``nonfinite`` "zero": NaN/Inf texels of the HDRI count as black, as for the projection."""
+    if scene is None:
+        from .core.lights import extract_lights as core_extract
+
+        import numpy as np
+
+        pixels = _module("blender.images").load_image_pixels(source)
+        if nonfinite == "zero":
+            pixels = np.where(np.isfinite(pixels), pixels, 0.0).astype(np.float32)
+        try:
+            extraction = core_extract(pixels, count)
+        except ValueError as error:
+            raise CommandError(f"{source}: {error}") from None
+        from .core.projection import project_equirect
+
+        coeffs = project_equirect(extraction.rest)
+        found = [(light.direction, light.angular_diameter, light.colour, light.strength,
+                  light.power_fraction) for light in extraction.lights]
+    else:
+        try:
+            info = _module("api").extract_lights(scene, count)
+        except ValueError as error:
+            raise CommandError(f"{source}: {error}") from None
+        extraction, coeffs = info.extraction, info.coefficients
+        found = [(obj.rotation_euler.to_matrix().col[2][:], obj.data.angle, obj.data.color[:],
+                  obj.data.energy, light.power_fraction)
+                 for obj, light in zip((scene.objects[n] for n in info.lights),
+                                       extraction.lights)]
+    for i, (direction, angle, colour, strength, share) in enumerate(found, 1):
+        d = ", ".join(f"{v:+.4f}" for v in direction)
+        c = ", ".join(f"{v:.4f}" for v in colour)
+        _print(f"Light {i}: Sun toward ({d}), angle {math.degrees(angle):.2f}°, colour ({c}), "
+               f"strength {strength:.6g} W/m², {100 * share:.1f} % of the light")
+    (before, _), (after, _) = extraction.errors[0], extraction.errors[-1]
+    _print(f"{len(found)} light(s) extracted: mean irradiance error {100 * before:.2f} % with SH "
+           f"alone, {100 * after:.2f} % with SH + lights (fraction of the total light)")
+    metadata["notes"] = (metadata.get("notes", "") + f" {len(found)} light(s) extracted: these "
+                         "coefficients hold the rest of the world.").strip()
+    metadata.pop("error_estimate", None)  # it was the whole world's
+    return coeffs
+
+
+APPLY_MODES = ("KEEP_BSDF", "EMISSION")  # blender.materials.MODES (this module needs no bpy)
+
+
+def _add_mode_option(parser):
+    """``apply --mode``: keep the BSDF (default) or drive the surface by the SH emission."""
+    parser.add_argument(
+        "--mode", choices=APPLY_MODES, default=APPLY_MODES[0],
+        help="KEEP_BSDF (default): materials keep their BSDF (lamps, shadows, reflections) and "
+        "SH replaces the world's diffuse light, which the world then no longer gives to "
+        "diffuse rays (Cycles); EMISSION: the SH emission alone drives the surface")
+
+
 def build_parser(prog=PROG):
     parser = argparse.ArgumentParser(
         prog=prog,
@@ -665,6 +736,7 @@ def build_parser(prog=PROG):
                    "scene's setting, else 256)")
     p.add_argument("--scene", metavar="NAME", help="scene of the .blend (default: active)")
     _add_nonfinite(p)
+    _add_lights_option(p)
     p.set_defaults(run=cmd_compute)
 
     p = commands.add_parser(
@@ -685,6 +757,7 @@ def build_parser(prog=PROG):
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="only the materials of these objects (default: every object)")
     p.add_argument("--scene", metavar="NAME", help="scene to change (default: active)")
+    _add_mode_option(p)
     p.set_defaults(run=cmd_apply)
 
     p = commands.add_parser(

@@ -14,7 +14,7 @@ import bpy
 
 from ..core.edits import describe_coefficients
 from ..core.minimum import negative_light_warning
-from . import design, panels, previews, scene_data
+from . import design, lights_ui, panels, previews, scene_data
 from .polls import NO_COEFFICIENTS, coefficients_poll, scene_poll
 
 WARNING_WIDTH = 44  # characters per line of the wrapped warning
@@ -301,7 +301,9 @@ def draw_buttons(layout):
     row = col.row(align=True)
     for kind in design.WINDOWS:
         row.operator("shlight.window", text=design.LABELS[kind]).kind = kind
-    layout.operator("shlight.split_sun", icon="LIGHT_SUN")
+    row = layout.row(align=True)
+    row.operator("shlight.split_sun", icon="LIGHT_SUN")
+    lights_ui.draw_lights(row)
 
 
 def draw_design(layout, context):

@@ -1,12 +1,25 @@
 """Put the "SH Irradiance" group into materials and take it out again, leaving no trace.
 
+Two modes (``MODES``):
+
+* "KEEP_BSDF" (the default): the material keeps its BSDF, so lamps (with their shadows),
+  glossy and coat reflections of the world and transmission keep working, and the group's
+  Emission (the diffuse weight of the BSDF × E/π) is added to it, replacing the world's
+  diffuse light, which the world then no longer gives to diffuse rays in Cycles
+  (``keep_bsdf``: the weight, the world's ray visibility, what EEVEE cannot do).
+* "EMISSION": the group's Emission alone drives the Surface (albedo · E/π): exact, noise free
+  at one sample, but nothing else lights the material (no lamps, no reflections).
+
 ``apply_to_materials`` adds one group node per material. Its Albedo comes from the material's
 diffuse base colour (Principled BSDF "Base Color" or Diffuse BSDF "Color": the node linked to it,
 or its value), its Normal from that BSDF's linked Normal input if any (normal and bump maps
-keep working), and its "Shader" output drives the Surface of every Material Output node, so
-Cycles and EEVEE outputs agree. The links it replaces are recorded as JSON in the custom
-property ``NODE_MARKER`` of the added node; ``remove_from_materials`` relinks them and deletes
-that node, which also deletes the links into it. Nothing else in the material is touched.
+keep working), and its "Shader" output drives (KEEP_BSDF: is added to) the Surface of every
+Material Output node, so Cycles and EEVEE outputs agree. The links it replaces are recorded
+as JSON in the custom property ``NODE_MARKER`` of the added node (with the mode and the names of the other nodes it
+added: the Add Shader and the weight's Math nodes); ``remove_from_materials`` relinks them and
+deletes those nodes, which also deletes the links into them, and gives each world its diffuse
+visibility back once no material of the file is in "KEEP_BSDF" mode. Nothing else in the
+material is touched.
 
 The BSDF is the one linked to the active Material Output's Surface (through reroutes), or
 else the only Principled/Diffuse BSDF of the material. Applying to a material that already has
@@ -16,8 +29,8 @@ Materials without a diffuse part are left alone and reported as skipped: a Surfa
 (mixes and sums of) Emission, Glass, Refraction, Transparent, Holdout, Glossy, Metallic, hair,
 Ray Portal or Background shaders, or of a Principled BSDF whose unlinked Metallic or
 Transmission Weight is 1; an unconnected Surface (volume-only or empty). A node group in the
-surface counts as possibly diffuse. Only the materials given are changed; the shared group is
-(re)built once per call (``nodes.ensure_node_group``).
+surface counts as possibly diffuse (``diffuse_part``). Only the materials given are changed;
+the shared group is (re)built once per call (``nodes.ensure_node_group``).
 Every material is checked before it is changed; an error while changing it is rolled back.
 """
 
@@ -27,12 +40,24 @@ from typing import NamedTuple
 
 import bpy
 
-from . import compat
+from . import compat, keep_bsdf
+from .diffuse_part import linked_socket, no_diffuse_reason, source_node
 from .nodes import GROUP_NAME, ensure_node_group
 
-# Custom property of the added group node: JSON {"version": 1, "outputs": [...]}.
+# Custom property of the added group node: JSON {"version": 2, "mode": ..., "outputs": [...],
+# "added": [names of the other nodes added]} (version 1: emission, nothing else added).
 NODE_MARKER = "sh_lighting_original_links"
-RECORD_VERSION = 1
+RECORD_VERSION = 2
+MODES = ("KEEP_BSDF", "EMISSION")
+DEFAULT_MODE = "KEEP_BSDF"
+MODE_ITEMS = (
+    ("KEEP_BSDF", "Keep BSDF",
+     "Keep the material's BSDF (lamps, shadows, reflections); SH replaces the world's diffuse "
+     "light (Cycles)"),
+    ("EMISSION", "Emission Only",
+     "Drive the surface by the SH emission alone: exact and noise free, no lamps or "
+     "reflections"),
+)
 
 # BSDF node type -> its diffuse colour input.
 BASE_COLOUR_INPUTS = {
@@ -70,23 +95,54 @@ def is_applied(material):
     return bool(added_nodes(material))
 
 
-def apply_to_materials(materials, scene):
-    """Drive each material's surface by the SH group; returns ``Result(changed, skipped)``."""
+def mode_of(material):
+    """The mode ``material`` is applied in ("KEEP_BSDF", "EMISSION"), or None if not applied."""
+    for node in added_nodes(material):
+        try:
+            return json.loads(node[NODE_MARKER]).get("mode", "EMISSION")
+        except (ValueError, TypeError, AttributeError):
+            return None
+    return None
+
+
+def check_mode(mode):
+    """``mode`` itself, or a ValueError saying which modes there are."""
+    if mode not in MODES:
+        raise ValueError(f"unknown Apply mode {mode!r}: use one of {', '.join(MODES)}")
+    return mode
+
+
+def apply_to_materials(materials, scene, mode=DEFAULT_MODE):
+    """Light each material by the SH group in ``mode`` (``MODES``); ``Result(changed, skipped)``.
+
+    In "KEEP_BSDF" mode the scene's world stops giving diffuse light in Cycles
+    (``keep_bsdf.hide_world_diffuse``) once a material has been changed.
+    """
+    check_mode(mode)
     changed, skipped = [], []
     # The group, built once, when the first material gets it (an error: again next time).
     group = functools.cache(ensure_node_group)
     for material in _unique(materials):
         name = _name(material)
         try:
-            _apply_one(material, group)
+            _apply_one(material, group, mode)
         except SkipMaterial as error:
             skipped.append((name, str(error)))
             continue
         changed.append(name)
+    if changed and mode == "KEEP_BSDF":
+        keep_bsdf.hide_world_diffuse(scene.world)
+    _restore_worlds_if_unused()
     return Result(changed, skipped)
 
 
-def _apply_one(material, group):
+def _restore_worlds_if_unused():
+    """The worlds' diffuse visibility back once no material of the file keeps its BSDF."""
+    if not any(mode_of(m) == "KEEP_BSDF" for m in bpy.data.materials if m.library is None):
+        keep_bsdf.restore_worlds(bpy.data.worlds)
+
+
+def _apply_one(material, group, mode):
     """Apply to one material (refreshing it if applied); SkipMaterial when left alone.
 
     ``group``: returns the SH group, called only once the material is known to take it.
@@ -106,7 +162,7 @@ def _apply_one(material, group):
         raise
     tree = group()
     try:
-        _apply(material, plan, tree)
+        _apply(material, plan, tree, mode)
     except Exception as error:  # rolled back by _apply: report, go on with the rest
         state = "without SH lighting" if refreshed else "unchanged"
         raise SkipMaterial(f"failed and was left {state}: {error}") from error
@@ -126,6 +182,7 @@ def remove_from_materials(materials):
             skipped.append((name, str(error)))
             continue
         changed.append(name)
+    _restore_worlds_if_unused()
     return Result(changed, skipped)
 
 
@@ -156,78 +213,13 @@ def _check_editable(material):
         raise SkipMaterial("does not use nodes (no shader node tree in use)")
 
 
-# Shader nodes without a diffuse part (4.2 to 5.0 names; absent ones simply never match).
-NO_DIFFUSE_SHADERS = frozenset(
-    {
-        "ShaderNodeEmission",
-        "ShaderNodeBsdfGlass",
-        "ShaderNodeBsdfRefraction",
-        "ShaderNodeBsdfTransparent",
-        "ShaderNodeHoldout",
-        "ShaderNodeBsdfGlossy",
-        "ShaderNodeBsdfAnisotropic",
-        "ShaderNodeBsdfMetallic",
-        "ShaderNodeBsdfHair",
-        "ShaderNodeBsdfHairPrincipled",
-        "ShaderNodeBsdfRayPortal",
-        "ShaderNodeBackground",
-    }
-)
-SHADER_SUMS = frozenset({"ShaderNodeMixShader", "ShaderNodeAddShader"})
-# Unlinked Principled inputs that remove its diffuse base when at 1.
-PRINCIPLED_NON_DIFFUSE_INPUTS = ("Metallic", "Transmission Weight", "Transmission")
-
-
-def _surface_shaders(output):
-    """The shader nodes the Surface of ``output`` sums (through reroutes, Mix and Add Shader).
-
-    [] when the Surface is not connected.
-    """
-    leaves, stack, seen = [], [output.inputs["Surface"]], set()
-    while stack:
-        node = _source_node(stack.pop())
-        if node is None or node.as_pointer() in seen:
-            continue
-        seen.add(node.as_pointer())
-        if node.bl_idname in SHADER_SUMS and not node.mute:
-            stack.extend(s for s in node.inputs if s.type == "SHADER")
-        else:
-            leaves.append(node)
-    return leaves
-
-
-def _has_no_diffuse(node):
-    if node.bl_idname in NO_DIFFUSE_SHADERS:
-        return True
-    if node.bl_idname != "ShaderNodeBsdfPrincipled" or node.mute:
-        return False
-    for name in PRINCIPLED_NON_DIFFUSE_INPUTS:
-        socket = node.inputs.get(name)
-        if socket is not None and not socket.is_linked and socket.default_value >= 1.0:
-            return True
-    return False
-
-
-def _check_diffuse_part(active):
-    """SkipMaterial when what ``active`` renders has no diffuse part (see the docstring)."""
-    leaves = _surface_shaders(active)
-    if not leaves:
-        if _linked_socket(active.inputs["Volume"]) is not None:
-            raise SkipMaterial("volume only: no surface shader, so no diffuse part to light")
-        raise SkipMaterial("no diffuse part: the Material Output's Surface is not connected")
-    if all(_has_no_diffuse(node) for node in leaves):
-        kinds = ", ".join(sorted({node.bl_idname for node in leaves}))
-        raise SkipMaterial(
-            f"no diffuse base colour: the surface is only {kinds}, which has no diffuse part"
-        )
-
-
 class _Plan(NamedTuple):
     outputs: list  # every Material Output node
     active: object  # the output the BSDF was traced from, for placing the new node
     albedo: object  # socket linked to the base colour, or None
     albedo_value: tuple  # base colour value, used when ``albedo`` is None
     normal: object  # socket linked to the BSDF's Normal, or None
+    bsdf: object  # the BSDF node the base colour comes from
 
 
 def _plan(material):
@@ -237,12 +229,14 @@ def _plan(material):
     if not outputs:
         raise SkipMaterial("no Material Output node")
     active = next((node for node in outputs if node.is_active_output), outputs[0])
-    _check_diffuse_part(active)
+    reason = no_diffuse_reason(active)
+    if reason is not None:
+        raise SkipMaterial(reason)
     bsdf = _traced_bsdf(active)
     if bsdf is None:
         candidates = [node for node in tree.nodes if node.bl_idname in BASE_COLOUR_INPUTS]
         if len(candidates) != 1:
-            surface = _source_node(active.inputs["Surface"])
+            surface = source_node(active.inputs["Surface"])
             what = f"a {surface.bl_idname} node" if surface else "nothing"
             raise SkipMaterial(
                 f"no diffuse base colour: the surface is {what} and the material has "
@@ -253,35 +247,15 @@ def _plan(material):
     return _Plan(
         outputs=outputs,
         active=active,
-        albedo=_linked_socket(colour),
+        albedo=linked_socket(colour),
         albedo_value=tuple(colour.default_value),
-        normal=_linked_socket(bsdf.inputs.get("Normal")),
+        normal=linked_socket(bsdf.inputs.get("Normal")),
+        bsdf=bsdf,
     )
 
 
-def _linked_socket(socket):
-    """The output socket feeding ``socket`` through an unmuted link, or None."""
-    if socket is None or not socket.is_linked:
-        return None
-    link = socket.links[0]
-    return None if getattr(link, "is_muted", False) else link.from_socket
-
-
-def _source_node(socket):
-    """The node feeding ``socket``, looking through reroutes; None when unlinked."""
-    for _ in range(1000):
-        linked = _linked_socket(socket)
-        if linked is None:
-            return None
-        node = linked.node
-        if node.bl_idname != "NodeReroute":
-            return node
-        socket = node.inputs[0]
-    return None
-
-
 def _traced_bsdf(output):
-    node = _source_node(output.inputs["Surface"])
+    node = source_node(output.inputs["Surface"])
     return node if node is not None and node.bl_idname in BASE_COLOUR_INPUTS else None
 
 
@@ -298,10 +272,12 @@ def _surface_record(output):
     }
 
 
-def _apply(material, plan, group):
+def _apply(material, plan, group, mode):
     tree = material.node_tree
-    record = {"version": RECORD_VERSION, "outputs": [_surface_record(o) for o in plan.outputs]}
+    record = {"version": RECORD_VERSION, "mode": mode, "added": [],
+              "outputs": [_surface_record(o) for o in plan.outputs]}
     node = tree.nodes.new("ShaderNodeGroup")
+    added = []
     try:
         node.node_tree = group
         if node.node_tree != group:
@@ -310,17 +286,46 @@ def _apply(material, plan, group):
         node.label = GROUP_NAME
         node.location = (plan.active.location.x - 40.0, plan.active.location.y + 260.0)
         node[NODE_MARKER] = json.dumps(record)
-        if plan.albedo is not None:
+        weight = None
+        if mode == "KEEP_BSDF":
+            weight = keep_bsdf.diffuse_weight(tree, plan.bsdf, added)
+        if weight is not None:
+            colour = plan.albedo if plan.albedo is not None else plan.albedo_value
+            tree.links.new(keep_bsdf.weighted_albedo(tree, colour, weight, added),
+                           node.inputs["Albedo"])
+        elif plan.albedo is not None:
             tree.links.new(plan.albedo, node.inputs["Albedo"])
         else:
             node.inputs["Albedo"].default_value = plan.albedo_value
         if plan.normal is not None:
             tree.links.new(plan.normal, node.inputs["Normal"])
         for output in plan.outputs:
-            tree.links.new(node.outputs["Shader"], output.inputs["Surface"])
+            _drive_surface(tree, output, node, mode, added)
+        for extra in added:
+            extra.location = (node.location.x - 220.0, node.location.y)
+        record["added"] = [extra.name for extra in added]
+        node[NODE_MARKER] = json.dumps(record)
     except Exception:
+        record["added"] = [extra.name for extra in added]
         _restore(tree, node, record)
         raise
+
+
+def _drive_surface(tree, output, node, mode, added):
+    """Link the SH ``node`` into ``output``'s Surface: alone ("EMISSION", or nothing was
+    linked), or added to what was linked there ("KEEP_BSDF")."""
+    surface = output.inputs["Surface"]
+    original = linked_socket(surface)
+    if mode == "EMISSION" or original is None:
+        tree.links.new(node.outputs["Shader"], surface)
+        return
+    add = tree.nodes.new("ShaderNodeAddShader")
+    add.label = "BSDF + SH diffuse"
+    add.location = (output.location.x - 180.0, output.location.y + 120.0)
+    added.append(add)
+    tree.links.new(original, add.inputs[0])
+    tree.links.new(node.outputs["Shader"], add.inputs[1])
+    tree.links.new(add.outputs[0], surface)
 
 
 def _remove(material):
@@ -356,13 +361,16 @@ def _remove(material):
 
 
 def _restore(tree, node, record):
-    """Relink each recorded output still driven by ``node`` (or left unlinked), drop ``node``."""
+    """Relink each recorded output still driven by ``node`` or the nodes added with it (or
+    left unlinked); delete them."""
+    added = [tree.nodes.get(name) for name in record.get("added", ())]
+    ours = {node.name, *(extra.name for extra in added if extra is not None)}
     for entry in record["outputs"]:
         output = tree.nodes.get(entry["output"])
         if output is None or output.bl_idname != "ShaderNodeOutputMaterial":
             continue
         surface = output.inputs["Surface"]
-        if surface.is_linked and surface.links[0].from_node != node:
+        if surface.is_linked and surface.links[0].from_node.name not in ours:
             continue  # relinked by the user since: keep their choice
         for link in list(surface.links):
             tree.links.remove(link)
@@ -375,6 +383,9 @@ def _restore(tree, node, record):
         link = tree.links.new(socket, surface)
         if entry.get("muted") and hasattr(link, "is_muted"):
             link.is_muted = True
+    for extra in added:
+        if extra is not None:
+            tree.nodes.remove(extra)
     tree.nodes.remove(node)
 
 

@@ -10,7 +10,7 @@ import time
 
 import bpy
 
-from . import compute, materials, scene_data
+from . import compute, lights, materials, scene_data
 from .polls import coefficients_poll, scene_poll
 
 
@@ -91,6 +91,7 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
         except ValueError as error:  # WorldError and invalid coefficients
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
+        lights.remove_lights(context.scene)  # the whole world is in the SH again
         elapsed = time.perf_counter() - start
         origin = "the world image" if info.source == "image" else "a capture of the world"
         self.report({"INFO"}, f"SH lighting computed from {origin} in {elapsed:.2f} s")
@@ -119,6 +120,7 @@ class SHLIGHT_OT_reset(bpy.types.Operator):
         except (LookupError, TypeError, ValueError) as error:
             self.report({"ERROR"}, f"Cannot reset: {error}")
             return {"CANCELLED"}
+        lights.remove_lights(context.scene)  # the whole world is in the SH again
         self.report({"INFO"}, "SH lighting reset to the values computed from the world")
         return {"FINISHED"}
 
@@ -130,6 +132,11 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
     bl_idname = "shlight.apply"
     bl_label = "Apply to Materials"
     bl_options = {"REGISTER", "UNDO"}
+
+    mode: bpy.props.EnumProperty(
+        name="Mode", items=materials.MODE_ITEMS, default=materials.DEFAULT_MODE,
+        description="Keep the BSDF (SH replaces the world's diffuse light) or emission only",
+    )
 
     @classmethod
     def poll(cls, context):
@@ -144,7 +151,7 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
             self.report({"WARNING"}, f"SH lighting applied to no material: {bare}")
             return {"CANCELLED"}
         try:
-            result = materials.apply_to_materials(mats, scene)
+            result = materials.apply_to_materials(mats, scene, self.mode)
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}

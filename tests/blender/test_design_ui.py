@@ -21,7 +21,7 @@ from blender_scenes import (
 from numpy.testing import assert_allclose, assert_array_equal
 
 import sh_lighting
-from sh_lighting.blender import compat, compute, design, design_ui, previews, scene_data
+from sh_lighting.blender import compat, compute, design, design_ui, lights_ui, previews, scene_data
 from sh_lighting.blender.images import image_pixels
 from sh_lighting.blender.world import world_coefficients
 from sh_lighting.core import edits, windowing
@@ -620,7 +620,8 @@ def test_design_panel_draws_previews_warning_words_and_buttons(addon, monkeypatc
 
     ops = [(c[1], dict(vars(c[2]))) for c in calls if c[0] == "operator"]
     idnames = {name for name, _ in ops}
-    assert idnames == {f"shlight.{cls.bl_idname.split('.')[1]}" for cls in design_ui.classes
+    assert idnames == {f"shlight.{cls.bl_idname.split('.')[1]}"
+                       for cls in (*design_ui.classes, *lights_ui.classes)
                        if hasattr(cls, "bl_idname") and cls.bl_idname.startswith("shlight.")}
     assert ("shlight.rotate", {"mode": "MAPPING"}) in ops
     assert ("shlight.exposure", {"stops": -1.0}) in ops

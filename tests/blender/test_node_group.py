@@ -60,7 +60,7 @@ def sh_scene(kind="sphere", size=64, engine="CYCLES", coeffs=COEFFS):
         "Base Color"
     ].default_value = (1.0, 1.0, 1.0, 1.0)
     add_object(kind, material)
-    result = materials.apply_to_materials([material], scene)
+    result = materials.apply_to_materials([material], scene, mode="EMISSION")
     assert result.changed == [material.name] and not result.skipped, result
     scene_data.store(scene, coeffs, SCRIPT)
     add_camera(scene, (3.0, -4.0, 2.5))
@@ -277,7 +277,7 @@ def test_apply_and_remove_restore_exactly():
     mats = list(made.values())
 
     for _ in range(2):  # applying twice refreshes, never stacks
-        changed, skipped = materials.apply_to_materials(mats + [None, mats[0]], scene)
+        changed, skipped = materials.apply_to_materials(mats + [None, mats[0]], scene, mode="EMISSION")
         assert changed == [made["textured"].name, made["diffuse"].name]
         reasons = dict(skipped)
         assert set(reasons) == {made["no_output"].name, made["emission"].name, "(empty slot)"}
@@ -316,7 +316,7 @@ def test_apply_and_remove_restore_exactly():
 def test_remove_refuses_when_the_original_node_is_gone():
     scene = bpy.context.scene
     material = make_test_materials()["textured"]
-    materials.apply_to_materials([material], scene)
+    materials.apply_to_materials([material], scene, mode="EMISSION")
     material.node_tree.nodes.remove(material.node_tree.nodes["Principled BSDF"])
     links, names = link_set(material), node_set(material)
     changed, skipped = materials.remove_from_materials([material])
@@ -329,7 +329,8 @@ def test_failed_apply_is_rolled_back(monkeypatch):
     before = {key: (link_set(m), node_set(m)) for key, m in made.items()}
     wrong = bpy.data.node_groups.new("Not a shader group", "GeometryNodeTree")
     monkeypatch.setattr(materials, "ensure_node_group", lambda: wrong)
-    changed, skipped = materials.apply_to_materials(made.values(), bpy.context.scene)
+    changed, skipped = materials.apply_to_materials(made.values(), bpy.context.scene,
+                                                    mode="EMISSION")
     assert changed == []
     reasons = dict(skipped)
     assert "left unchanged" in reasons[made["textured"].name]
@@ -384,7 +385,7 @@ def test_sh_render_vs_path_traced_hdri(tmp_path, hdri_dir):
     compat.ensure_node_tree(sh_material).nodes["Principled BSDF"].inputs[
         "Base Color"
     ].default_value = (1.0, 1.0, 1.0, 1.0)
-    assert materials.apply_to_materials([sh_material], scene).changed == ["SH"]
+    assert materials.apply_to_materials([sh_material], scene, mode="EMISSION").changed == ["SH"]
     sphere.data.materials[0] = sh_material
     scene_data.store(scene, coeffs, SCRIPT)
     scene.cycles.samples = 1

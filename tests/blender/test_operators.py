@@ -320,7 +320,7 @@ def test_apply_and_remove_selected_then_all(addon):
     (lit, lit_mat), (other, other_mat) = two_objects_with_materials()
     scene_data.store(scene, KNOWN, SCRIPT)
 
-    result, reports = run_execute(operators.SHLIGHT_OT_apply)
+    result, reports = run_execute(operators.SHLIGHT_OT_apply, mode="KEEP_BSDF")
     assert result == {"FINISHED"}
     assert reports == [({"INFO"}, "SH lighting applied to 1 material(s), 0 skipped")]
     assert materials.is_applied(lit_mat) and not materials.is_applied(other_mat)
@@ -365,12 +365,12 @@ def test_apply_reports_objects_without_a_material(addon):
     scene_data.store(scene, KNOWN, SCRIPT)
     lit.select_set(False)
     bare.select_set(True)
-    result, reports = run_execute(operators.SHLIGHT_OT_apply)
+    result, reports = run_execute(operators.SHLIGHT_OT_apply, mode="KEEP_BSDF")
     assert result == {"CANCELLED"}
     assert reports == [({"WARNING"}, "SH lighting applied to no material: 1 object(s) have no "
                         "material (Bare): give them a material first")]
     scene.sh_lighting.apply_target = "ALL"
-    result, reports = run_execute(operators.SHLIGHT_OT_apply)
+    result, reports = run_execute(operators.SHLIGHT_OT_apply, mode="KEEP_BSDF")
     assert result == {"FINISHED"}
     assert reports == [({"INFO"}, "SH lighting applied to 2 material(s), 0 skipped; 2 object(s) "
                         "have no material (Bare, Empty Slot): give them a material first")]

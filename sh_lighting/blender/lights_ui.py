@@ -1,0 +1,58 @@
+"""Extract Lights in the UI: the operator and a small draw function for the panel."""
+
+import bpy
+
+from ..core.lights import MAX_COUNT
+from . import lights
+from .polls import scene_poll
+
+
+class SHLIGHT_OT_extract_lights(bpy.types.Operator):
+    """Take the world image's compact bright sources (sun, windows, softboxes) out as Sun
+    lights and keep the rest of the world as SH lighting (earlier extracted lights are
+    updated or deleted, never doubled)"""
+
+    bl_idname = "shlight.extract_lights"
+    bl_label = "Extract Lights"
+    bl_options = {"REGISTER", "UNDO"}
+
+    count: bpy.props.IntProperty(
+        name="Lights", default=3, min=0, max=MAX_COUNT,
+        description="Largest number of lights to extract")
+    use_error_target: bpy.props.BoolProperty(
+        name="Error Target", default=False,
+        description="Stop once SH + lights are within the error target of the world")
+    error_target: bpy.props.FloatProperty(
+        name="Target", default=0.5, min=0.01, max=10.0, subtype="PERCENTAGE",
+        description="Mean error of SH + lights against the world's irradiance, % of its light")
+
+    @classmethod
+    def poll(cls, context):
+        if not scene_poll(cls, context):
+            return False
+        if context.scene.world is None:
+            cls.poll_message_set("The scene has no world: give it an HDR image first")
+            return False
+        return True
+
+    def invoke(self, context, event):
+        return context.window_manager.invoke_props_dialog(self)
+
+    def execute(self, context):
+        target = self.error_target / 100.0 if self.use_error_target else None
+        try:
+            info = lights.extract_lights(context.scene, self.count, target)
+        except (LookupError, ValueError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"INFO"}, info.report())
+        return {"FINISHED"}
+
+
+def draw_lights(layout):
+    """The Extract Lights button and how many lights the scene holds (for the panel)."""
+    layout.operator("shlight.extract_lights", icon="LIGHT_SUN")
+
+
+classes = (SHLIGHT_OT_extract_lights,)
+register, unregister = bpy.utils.register_classes_factory(classes)

@@ -1,0 +1,98 @@
+"""core.lights: the extracted lights plus the SH of the rest equal the world's irradiance."""
+
+import numpy as np
+import pytest
+
+from sh_lighting.core import lights as core_lights
+from sh_lighting.core.equirect import texel_directions, texel_solid_angles
+from sh_lighting.core.irradiance import irradiance, relative_error, total_power
+from sh_lighting.core.projection import project_equirect
+from sh_lighting.core.sh import spread_normals
+from sh_lighting.core.sun import eevee_style_split
+from sh_lighting.core.world_map import equirect_irradiance
+
+HEIGHT, WIDTH = 128, 256
+SKY = np.array([0.3, 0.4, 0.5])
+
+
+def disc_world(suns, sky=SKY):
+    """Constant sky plus uniform discs: [(direction, radius in degrees, RGB radiance)]."""
+    pixels = np.ones((HEIGHT, WIDTH, 3)) * sky
+    directions = texel_directions(HEIGHT, WIDTH)
+    for direction, radius, radiance in suns:
+        d = np.asarray(direction, float) / np.linalg.norm(direction)
+        inside = directions @ d > np.cos(np.radians(radius))
+        pixels[inside] = radiance
+    return pixels.astype(np.float32)
+
+
+TWO_SUNS = [((1.0, 0.0, 1.0), 3.0, (3000.0, 2800.0, 2500.0)),
+            ((-1.0, 0.2, 0.8), 2.0, (2000.0, 2100.0, 2200.0))]
+
+
+def test_two_opposite_suns_become_two_lights_where_eevee_merges_them():
+    pixels = disc_world(TWO_SUNS)
+    result = core_lights.extract_lights(pixels, count=4)
+    assert len(result.lights) == 2
+    normals = spread_normals(512)
+    truth = equirect_irradiance(pixels, normals)
+    power = total_power(project_equirect(pixels))
+    for light, (direction, _, radiance) in zip(result.lights, TWO_SUNS):
+        d = np.asarray(direction) / np.linalg.norm(direction)
+        assert np.degrees(np.arccos(light.direction @ d)) < 0.2
+        assert light.colour.max() == 1.0
+    # EEVEE's threshold split: one sun between the two, far from both
+    _, eevee_direction, eevee_coeffs = eevee_style_split(pixels)
+    for direction, _, _ in TWO_SUNS:
+        d = np.asarray(direction) / np.linalg.norm(direction)
+        assert np.degrees(np.arccos(eevee_direction @ d)) > 15.0
+    eevee_rgb, _, _ = eevee_style_split(pixels)
+    eevee = relative_error(irradiance(eevee_coeffs, normals)
+                           + np.maximum(normals @ eevee_direction, 0)[:, None] * eevee_rgb,
+                           truth, power)
+    ours = result.errors[-1]
+    plain = result.errors[0]
+    print(f"\ntwo suns, mean / max error (% of the light): plain SH {100 * plain[0]:.2f} / "
+          f"{100 * plain[1]:.2f}, SH + 2 lights {100 * ours[0]:.3f} / {100 * ours[1]:.3f}, "
+          f"EEVEE-style split {100 * eevee[0]:.2f} / {100 * eevee[1]:.2f}")
+    assert ours[0] < 0.1 * plain[0] and ours[0] < 0.1 * eevee[0]
+
+
+def test_rest_plus_lights_is_the_world_irradiance_by_brute_force():
+    pixels = disc_world(TWO_SUNS)
+    result = core_lights.extract_lights(pixels, count=2)
+    # normals that see each source whole: the light's cosine law is then exact
+    normals = spread_normals(2000)
+    clear = np.ones(len(normals), bool)
+    for light in result.lights:
+        clear &= normals @ light.direction > np.sin(light.angular_diameter)
+    truth = equirect_irradiance(pixels, normals[clear])
+    rebuilt = (equirect_irradiance(result.rest, normals[clear])
+               + core_lights.light_irradiance(result.lights, normals[clear]))
+    worst = np.abs(rebuilt - truth).max() / truth.max()
+    print(f"\nrest + lights vs the world, brute force, {clear.sum()} normals: max {worst:.2e}")
+    assert worst < 1e-4
+    # power: the map lost exactly what the lights carry
+    solid = texel_solid_angles(HEIGHT, WIDTH)[:, None, None]
+    lost = ((pixels - result.rest) * solid).sum(axis=(0, 1))
+    carried = sum(light.power for light in result.lights)
+    np.testing.assert_allclose(lost, carried, rtol=1e-6)
+
+
+def test_count_zero_target_and_bad_arguments():
+    pixels = disc_world(TWO_SUNS)
+    none = core_lights.extract_lights(pixels, count=0)
+    assert none.lights == [] and len(none.errors) == 1
+    np.testing.assert_allclose(none.coefficients, project_equirect(pixels))
+    one = core_lights.extract_lights(pixels, count=8, error_target=0.9 * none.errors[0][0])
+    assert len(one.lights) == 1 and one.errors[-1][0] <= 0.9 * none.errors[0][0]
+    for bad in (-1, 9, 1.5):
+        with pytest.raises(ValueError, match="whole number from 0 to 8"):
+            core_lights.extract_lights(pixels, count=bad)
+    with pytest.raises(ValueError, match="error target"):
+        core_lights.extract_lights(pixels, error_target=0.0)
+
+
+def test_uniform_sky_has_no_light():
+    result = core_lights.extract_lights(disc_world([]), count=3)
+    assert result.lights == []
