@@ -2,8 +2,8 @@
 rest (``core.lights``; generalises Split Sun).
 
 ``extract_lights(scene, count, error_target)`` reads the world's equirect Environment Texture
-(with the Background's Strength and the Mapping node's rotation, as Compute from World sees
-it), takes up to ``count`` sources out, makes one Sun light per source (aimed along the
+(``world.read_world``: the Background's Strength and the Mapping node's rotation as evaluated
+at the current frame, the pixels decoded as Compute from World sees them), takes up to ``count`` sources out, makes one Sun light per source (aimed along the
 source's direction in the world, angle from its size, colour and strength from its texels ×
 Strength) and stores the coefficients of the world without them. The lights are ordinary
 objects (move, retint, delete them; all undoable), marked by the custom property
@@ -26,7 +26,7 @@ from mathutils import Matrix
 
 from ..core import lights as core_lights
 from ..core.world_map import map_coefficients, sun_light_rotation, to_world_direction
-from . import design, properties, scene_data
+from . import design, properties, scene_data, world
 
 LIGHT_MARKER = "sh_lighting_light"
 LIGHT_NAME = "SH Light"
@@ -111,17 +111,23 @@ def extract_lights(scene, count=3, error_target=None):
     world's light. A ValueError (``world.WorldError``, ``design.DesignError``) with nothing
     changed when the world is not an equirect image or an argument is wrong.
     """
-    image = design.world_image(scene)
-    if image.projection != "EQUIRECTANGULAR":
+    source = world.read_world(scene)
+    if isinstance(source, world.ProceduralSource):
         raise design.DesignError(
-            f"Extract Lights needs an equirectangular world image; image '{image.image}' of "
-            f"world '{image.world}' is a {image.projection.replace('_', ' ').lower()}")
-    strength = float(image.strength)
+            f"world '{source.world}' is not an Environment Texture image read directly "
+            f"({source.reason}): Extract Lights needs World Output ← Background ← Environment "
+            "Texture [← Mapping ← Texture Coordinate]")
+    if source.projection != "EQUIRECTANGULAR":
+        raise design.DesignError(
+            f"Extract Lights needs an equirectangular world image; image "
+            f"'{source.image.name}' of world '{source.world}' is a "
+            f"{source.projection.replace('_', ' ').lower()}")
+    strength = float(source.strength)
     if not strength > 0.0:
         raise design.DesignError(
-            f"world '{image.world}' has Strength {strength:g}: no light to extract")
-    extraction = core_lights.extract_lights(image.pixels, count, error_target)
-    rest = map_coefficients(extraction.rest, strength, image.rotation)
+            f"world '{source.world}' has Strength {strength:g}: no light to extract")
+    extraction = core_lights.extract_lights(source.pixels(), count, error_target)
+    rest = map_coefficients(extraction.rest, strength, source.rotation)
     scene_data.check_coefficients_9x3(rest)  # fail before anything changes
 
     existing = extracted_lights(scene)
@@ -132,7 +138,7 @@ def extract_lights(scene, count=3, error_target=None):
         data.energy = light.strength * strength
         data.color = tuple(float(v) for v in light.colour)
         data.angle = light.angular_diameter
-        direction = to_world_direction(light.direction, image.rotation)
+        direction = to_world_direction(light.direction, source.rotation)
         obj.rotation_mode = "XYZ"
         obj.rotation_euler = Matrix(sun_light_rotation(direction).tolist()).to_euler("XYZ")
         names.append(obj.name)
