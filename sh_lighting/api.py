@@ -74,8 +74,9 @@ __all__ = [
 def extract_lights(scene, count=3, error_target=None):
     """Take up to ``count`` compact bright sources of the world image out as Sun lights and
     store the coefficients of the rest (``blender.lights``); an ``error_target`` (fraction of
-    the world's light) stops earlier. Earlier extracted lights are updated or deleted, and
-    Reset / Compute from World delete them. Returns a ``LightsInfo``."""
+    the world's light) stops earlier. The rest also becomes the Reset values; earlier extracted
+    lights are updated or deleted, and Compute from World deletes them. Returns a
+    ``LightsInfo``."""
     return _lights.extract_lights(scene, count, error_target)
 
 
@@ -126,9 +127,7 @@ def reset(scene):
 
     A LookupError if nothing was computed yet. Returns the restored (9, 3) array.
     """
-    coeffs = _scene_data.reset(scene)
-    _lights.remove_lights(scene)  # the whole world is in the SH again: no extracted light
-    return coeffs
+    return _scene_data.reset(scene)
 
 
 def ensure_node_group():

@@ -5,12 +5,14 @@ rest (``core.lights``; generalises Split Sun).
 (``world.read_world``: the Background's Strength and the Mapping node's rotation as evaluated
 at the current frame, the pixels decoded as Compute from World sees them), takes up to ``count`` sources out, makes one Sun light per source (aimed along the
 source's direction in the world, angle from its size, colour and strength from its texels ×
-Strength) and stores the coefficients of the world without them. The lights are ordinary
-objects (move, retint, delete them; all undoable), marked by the custom property
+Strength) and stores the coefficients of the world without them, as the current values and as
+the Reset values (as Split Sun does: Reset then keeps the lights out of the SH). The lights
+are ordinary objects (move, retint, delete them; all undoable), marked by the custom property
 ``LIGHT_MARKER`` (their index) so that a new extraction updates them in place and deletes the
-ones no longer needed, and Reset or Compute from World (which store the whole world's
-coefficients again) delete them (``remove_lights``): a light is never counted twice. A Sun
-made by Split Sun (``design.SUN_MARKER``) counts as extracted light 0.
+ones no longer needed, and Compute from World (which stores the whole world's coefficients
+again) deletes them (``remove_lights``): a light is never counted twice. The brightest light
+is also Split Sun's Sun (``design.SUN_MARKER``, and the provenance names it), so Split Sun
+updates that light instead of adding another, and an extraction reuses Split Sun's Sun.
 
 The world itself keeps the sources (the background and, in Apply mode KEEP_BSDF, the glossy
 and transmission reflections of the world still show them), so the lights are made invisible
@@ -26,7 +28,7 @@ from mathutils import Matrix
 
 from ..core import lights as core_lights
 from ..core.world_map import map_coefficients, sun_light_rotation, to_world_direction
-from . import design, properties, scene_data, world
+from . import design, scene_data, world
 
 LIGHT_MARKER = "sh_lighting_light"
 LIGHT_NAME = "SH Light"
@@ -67,7 +69,7 @@ def extracted_lights(scene):
         if LIGHT_MARKER in obj:
             found.append((int(obj[LIGHT_MARKER]), obj.name, obj))
         elif obj.get(design.SUN_MARKER):
-            found.append((0, obj.name, obj))
+            found.append((-1, obj.name, obj))
     return [obj for _, _, obj in sorted(found, key=lambda item: item[:2])]
 
 
@@ -88,7 +90,9 @@ def _light_object(scene, existing, index):
     if existing:
         obj = existing.pop(0)
         obj.data.type = "SUN"
-        if design.SUN_MARKER in obj:
+        if index == 0:
+            obj[design.SUN_MARKER] = True
+        elif design.SUN_MARKER in obj:
             del obj[design.SUN_MARKER]
         obj[LIGHT_MARKER] = index
         obj.visible_glossy = obj.visible_transmission = False
@@ -96,6 +100,8 @@ def _light_object(scene, existing, index):
     name = f"{LIGHT_NAME} {index + 1}"
     obj = bpy.data.objects.new(name, bpy.data.lights.new(name, type="SUN"))
     obj[LIGHT_MARKER] = index
+    if index == 0:
+        obj[design.SUN_MARKER] = True  # Split Sun updates this light, adds no other
     obj.visible_glossy = obj.visible_transmission = False  # the world's image reflects it
     obj.id_properties_ui(LIGHT_MARKER).update(
         description="Made by SH Lighting's Extract Lights, which updates or deletes this light "
@@ -128,7 +134,7 @@ def extract_lights(scene, count=3, error_target=None):
             f"world '{source.world}' has Strength {strength:g}: no light to extract")
     extraction = core_lights.extract_lights(source.pixels(), count, error_target)
     rest = map_coefficients(extraction.rest, strength, source.rotation)
-    scene_data.check_coefficients_9x3(rest)  # fail before anything changes
+    scene_data.validate(rest)  # fail before anything changes
 
     existing = extracted_lights(scene)
     names, created = [], []
@@ -151,5 +157,9 @@ def extract_lights(scene, count=3, error_target=None):
         bpy.data.objects.remove(obj)
         if light is not None and light.users == 0:
             bpy.data.lights.remove(light)
-    stored = properties.store_coefficients(scene, rest)
+    record = {"source": "WORLD", "world": source.world, "method": "IMAGE",
+              "image": source.image.name, "lights": names}
+    if names:
+        record["sun"] = names[0]
+    stored = scene_data.store(scene, rest, record)  # also the Reset values
     return LightsInfo(names, created, removed, extraction, stored)

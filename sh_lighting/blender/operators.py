@@ -120,7 +120,6 @@ class SHLIGHT_OT_reset(bpy.types.Operator):
         except (LookupError, TypeError, ValueError) as error:
             self.report({"ERROR"}, f"Cannot reset: {error}")
             return {"CANCELLED"}
-        lights.remove_lights(context.scene)  # the whole world is in the SH again
         self.report({"INFO"}, "SH lighting reset to the values computed from the world")
         return {"FINISHED"}
 

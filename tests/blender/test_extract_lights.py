@@ -1,6 +1,6 @@
 """Extract Lights in Blender (blender/lights.py, lights_ui.py, api, CLI): Sun lights plus the
 SH of the rest give the world's irradiance, with the world's Mapping rotation and Strength;
-re-extraction, Reset and Compute never double a light; undo."""
+re-extraction, Reset, Split Sun and Compute never double a light; undo."""
 
 import subprocess
 import sys
@@ -38,7 +38,7 @@ def test_lights_plus_sh_equal_the_rotated_scaled_world(addon, hdri_dir, name):
     scene = bpy.context.scene
     path = str(hdri_dir / f"{name}.exr")
     environment_world(scene, path, STRENGTH, ROTATION)
-    api.compute_from_world(scene)
+    whole = api.compute_from_world(scene)
     info = api.extract_lights(scene, count=4)
     assert info.lights and len(lights.extracted_lights(scene)) == len(info.lights)
     for obj in lights.extracted_lights(scene):  # the world's image still shows in reflections
@@ -46,8 +46,8 @@ def test_lights_plus_sh_equal_the_rotated_scaled_world(addon, hdri_dir, name):
     pixels = load_image_pixels(path)
     normals = spread_normals(512)
     truth = map_irradiance(pixels, normals, STRENGTH, ROTATION)
-    power = total_power(scene_data.get_computed(scene))
-    plain = relative_error(irradiance(scene_data.get_computed(scene), normals), truth, power)
+    power = total_power(whole)
+    plain = relative_error(irradiance(whole, normals), truth, power)
     split = relative_error(irradiance(scene_data.get_coefficients(scene), normals)
                            + scene_light_irradiance(scene, normals), truth, power)
     print(f"\n{name}: {len(info.lights)} light(s); mean / max error (% of the light): SH "
@@ -58,29 +58,37 @@ def test_lights_plus_sh_equal_the_rotated_scaled_world(addon, hdri_dir, name):
     assert split[0] < 0.35 * plain[0]
 
 
-def test_reextraction_reset_and_compute_never_double_a_light(addon, hdri_dir):
+def light_count(scene):
+    return len([o for o in scene.objects if o.type == "LIGHT"])
+
+
+def test_reextraction_reset_split_sun_and_compute_never_double_a_light(addon, hdri_dir):
     scene = bpy.context.scene
     environment_world(scene, str(hdri_dir / "studio.exr"), 1.0)
-    api.compute_from_world(scene)
+    whole = api.compute_from_world(scene)
     first = api.extract_lights(scene, count=3)
     assert len(first.created) == 3
     scene.objects[first.lights[0]].data.color = (1.0, 0.0, 0.0)  # the artist retints one
     again = api.extract_lights(scene, count=3)
-    assert again.created == [] and again.lights == first.lights
-    assert len([o for o in scene.objects if o.type == "LIGHT"]) == 3
+    assert again.created == [] and again.lights == first.lights and light_count(scene) == 3
     np.testing.assert_array_equal(again.coefficients, first.coefficients)
+    # Reset: the Reset values are the rest now, the lights stay
+    api.set_coefficients(scene, whole)
+    api.reset(scene)
+    np.testing.assert_array_equal(scene_data.get_coefficients(scene), first.coefficients)
+    assert light_count(scene) == 3
+    # Split Sun updates the brightest light instead of adding a sun, coefficients unchanged
+    api.split_sun(scene)
+    assert light_count(scene) == 3
+    np.testing.assert_array_equal(scene_data.get_coefficients(scene), first.coefficients)
     fewer = api.extract_lights(scene, count=1)
     assert fewer.lights == first.lights[:1] and sorted(fewer.removed) == sorted(first.lights[1:])
     bpy.data.objects.remove(scene.objects[fewer.lights[0]])  # the artist deletes it
     back = api.extract_lights(scene, count=1)
-    assert len(back.created) == 1
-    api.reset(scene)
-    assert lights.extracted_lights(scene) == []
-    np.testing.assert_array_equal(scene_data.get_coefficients(scene),
-                                  scene_data.get_computed(scene))
-    api.extract_lights(scene, count=2)
-    api.compute_from_world(scene)
-    assert lights.extracted_lights(scene) == []
+    assert len(back.created) == 1 and light_count(scene) == 1
+    api.compute_from_world(scene)  # the whole world in the SH again: no light left
+    assert light_count(scene) == 0
+    np.testing.assert_array_equal(scene_data.get_coefficients(scene), whole)
 
 
 def test_operator_reports_and_undoes(addon, hdri_dir):
@@ -97,7 +105,7 @@ def test_operator_reports_and_undoes(addon, hdri_dir):
     assert lights.extracted_lights(scene) == []
     np.testing.assert_array_equal(scene_data.get_coefficients(scene), before)
     assert bpy.ops.shlight.extract_lights("EXEC_DEFAULT", True, count=2) == {"FINISHED"}
-    assert bpy.ops.shlight.reset() == {"FINISHED"}
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
     assert lights.extracted_lights(bpy.context.scene) == []
 
 
@@ -105,7 +113,7 @@ def test_no_image_world_is_one_clear_error_and_nothing_changes(addon):
     scene = bpy.context.scene
     scene.world = bpy.data.worlds.new("Plain")
     compat.ensure_node_tree(scene.world)  # a Background colour, no image
-    scene_data.set_coefficients(scene, np.ones((9, 3)))
+    api.set_coefficients(scene, np.ones((9, 3)))
     with pytest.raises(ValueError, match="Environment Texture"):
         api.extract_lights(scene)
     np.testing.assert_array_equal(scene_data.get_coefficients(scene), np.ones((9, 3)))

@@ -21,7 +21,8 @@ from benchmarks.shadow_scene import (
     mean_deviation,
     principled_material,
 )
-from sh_lighting.blender import keep_bsdf, materials, scene_data
+from sh_lighting import api
+from sh_lighting.blender import keep_bsdf, materials
 from sh_lighting.core import project_equirect
 
 SIZE = 48
@@ -33,7 +34,7 @@ LTS = bpy.app.version < (5, 0, 0)
 def gradient(hdri_dir, tmp_path):
     """The scene under a world of radiance 0.6 + 0.3 z, whose 9 coefficients are exact."""
     s = ShadowScene(hdri_dir / "studio.exr", SIZE, tmp_path)
-    scene_data.set_coefficients(s.scene, s.use_gradient_world())
+    api.set_coefficients(s.scene, s.use_gradient_world())
     s.sun = s.add_sun(*SUN)
     return s
 
@@ -41,7 +42,7 @@ def gradient(hdri_dir, tmp_path):
 @pytest.fixture
 def studio(hdri_dir, tmp_path):
     s = ShadowScene(hdri_dir / "studio.exr", SIZE, tmp_path)
-    scene_data.set_coefficients(s.scene, project_equirect(s.hdri_pixels()))
+    api.set_coefficients(s.scene, project_equirect(s.hdri_pixels()))
     s.sun = s.add_sun(*SUN)
     return s
 

@@ -179,7 +179,7 @@ def test_compute_apply_edit_a_channel_render(addon, tmp_path):
     lit_sphere(scene)
     assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
     computed = api.get_coefficients(scene)
-    assert bpy.ops.shlight.apply() == {"FINISHED"}
+    assert bpy.ops.shlight.apply(mode="EMISSION") == {"FINISHED"}  # exactly E/π
     rendered(scene, tmp_path / "computed.exr", computed, "after Compute and Apply")
     # the panel's fields: a channel of L10 and the gain of L00 (RNA writes, as the UI does)
     scene.path_resolve('["sh_L10"]')  # the field's path exists
@@ -197,7 +197,7 @@ def test_driver_reaches_the_render(addon, tmp_path):
     scene = bpy.context.scene
     lit_sphere(scene)
     api.set_coefficients(scene, BEFORE)
-    api.apply_to_materials(bpy.data.materials, scene)
+    api.apply_to_materials(bpy.data.materials, scene, mode="EMISSION")
     curve = scene.driver_add('["sh_L10_gain"]')
     curve.driver.type = "SCRIPTED"
     curve.driver.expression = "frame - 2"  # a simple expression: no Python needed
@@ -213,7 +213,7 @@ def test_python_assignment_and_undo_redo_reach_the_render(addon, tmp_path):
     scene = bpy.context.scene
     lit_sphere(scene)
     api.set_coefficients(scene, BEFORE)
-    api.apply_to_materials(bpy.data.materials, scene)
+    api.apply_to_materials(bpy.data.materials, scene, mode="EMISSION")
     bpy.ops.ed.undo_push(message="before")
     scene["sh_L11"] = [0.5, -0.3, 0.2]  # a script's item assignment, no tag
     after = BEFORE.copy()
@@ -251,7 +251,7 @@ def test_apply_keyframe_save_render_two_frames_without_the_addon(addon, tmp_path
     constant_world(scene, tmp_path)
     lit_sphere(scene)
     assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
-    assert bpy.ops.shlight.apply() == {"FINISHED"}
+    assert bpy.ops.shlight.apply(mode="EMISSION") == {"FINISHED"}  # exactly E/π
     computed = api.get_coefficients(scene)
     frames = {1: computed.copy(), 2: computed.copy()}
     scene["sh_L10"] = [0.4, 0.3, 0.2]  # a channel, keyed at frame 1
@@ -292,7 +292,7 @@ def test_file_load_renders_the_stored_values(addon, tmp_path):
     scene = bpy.context.scene
     lit_sphere(scene)
     api.set_coefficients(scene, BEFORE)
-    api.apply_to_materials(bpy.data.materials, scene)
+    api.apply_to_materials(bpy.data.materials, scene, mode="EMISSION")
     scene["sh_L2m2_gain"] = -1.0
     blend = tmp_path / "saved.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
