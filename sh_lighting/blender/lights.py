@@ -132,7 +132,8 @@ def extract_lights(scene, count=3, error_target=None):
     if not strength > 0.0:
         raise design.DesignError(
             f"world '{source.world}' has Strength {strength:g}: no light to extract")
-    extraction = core_lights.extract_lights(source.pixels(), count, error_target)
+    extraction = core_lights.extract_lights(source.pixels(), count, error_target,
+                                             luminance=design.luminance())
     rest = map_coefficients(extraction.rest, strength, source.rotation)
     scene_data.validate(rest)  # fail before anything changes
 

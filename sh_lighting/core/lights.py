@@ -88,7 +88,7 @@ def light_irradiance(lights, normals):
     return total
 
 
-def _as_light(sun, pixels, total_luminance):
+def _as_light(sun, pixels, total_luminance, luminance):
     """The ``Light`` carrying exactly the texels ``sun`` takes out of ``pixels``."""
     height, width = sun.mask.shape
     rgb = pixels[..., :3].astype(np.float64)[sun.mask]
@@ -96,26 +96,29 @@ def _as_light(sun, pixels, total_luminance):
         np.nonzero(sun.mask)[0], None]
     directions = texel_directions(height, width)[sun.mask]
     moment = excess.T @ directions  # (3 channels, 3): m per channel
-    luminance_moment = LUMINANCE @ moment
+    luminance_moment = luminance @ moment
     direction = luminance_moment / np.linalg.norm(luminance_moment)
     rgb_irradiance = np.maximum(moment @ direction, 0.0)
     strength = float(rgb_irradiance.max())
     power = excess.sum(axis=0)
     return Light(direction, sun.angular_diameter, rgb_irradiance / strength, strength,
-                 rgb_irradiance, power, float(power @ LUMINANCE) / total_luminance,
+                 rgb_irradiance, power, float(power @ luminance) / total_luminance,
                  sun.mask, sun.background)
 
 
 def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST,
                    peak_fraction=PEAK_FRACTION, max_radius=MAX_RADIUS,
-                   min_power_fraction=MIN_POWER_FRACTION, normals=None):
+                   min_power_fraction=MIN_POWER_FRACTION, normals=None, luminance=LUMINANCE):
     """Take up to ``count`` compact bright sources out of equirect ``pixels`` (module
     docstring); stop early once the mean error of SH + lights is ≤ ``error_target`` (a
     fraction of the map's power, None: no target). Returns an ``Extraction``.
 
     ``pixels``: (H, W, 3 or 4) linear radiance, rows top to bottom. ``normals``: where the
-    errors are measured (default ``ERROR_NORMALS`` of a Fibonacci lattice).
+    errors are measured (default ``ERROR_NORMALS`` of a Fibonacci lattice). ``luminance``:
+    the RGB weights of Y in the pixels' space (``core.colour.luminance_weights``; default
+    Rec.709's).
     """
+    luminance = np.asarray(luminance, dtype=np.float64)
     a = check_finite_pixels(check_pixels(pixels))
     if not 0 <= int(count) <= MAX_COUNT or int(count) != count:
         raise ValueError(f"the number of lights must be a whole number from 0 to {MAX_COUNT}, "
@@ -125,7 +128,7 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
     n = spread_normals(ERROR_NORMALS) if normals is None else np.asarray(normals, float)
     height, width, _ = a.shape
     solid = texel_solid_angles(height, width)
-    lum = a[..., :3].astype(np.float64) @ LUMINANCE
+    lum = a[..., :3].astype(np.float64) @ luminance
     total_luminance = float((lum * solid[:, None]).sum())
     background = weighted_median(lum, solid[:, None])
     reference = equirect_irradiance(a, n)
@@ -135,19 +138,20 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
     lights = []
     errors = [relative_error(irradiance(coeffs, n), reference, power)]
     while len(lights) < count and (error_target is None or errors[-1][0] > error_target):
-        peak = float((rest[..., :3].astype(np.float64) @ LUMINANCE).max())
+        peak = float((rest[..., :3].astype(np.float64) @ luminance).max())
         if peak < contrast * max(background, 0.0) or total_luminance <= 0.0:
             break
         # the peak-fraction threshold is relative to this source; the contrast to the map's
         # background (and the power share to the whole map's power), not to what is left
-        sun = detect_sun(rest, contrast=contrast * background / max(_median(rest, solid),
-                                                                     1e-300),
+        sun = detect_sun(rest, contrast=contrast * background
+                         / max(_median(rest, solid, luminance), 1e-300),
                          peak_fraction=peak_fraction, max_radius=max_radius,
                          min_power_fraction=min_power_fraction * total_luminance
-                         / max(_luminance_power(rest, solid), 1e-300))
+                         / max(_luminance_power(rest, solid, luminance), 1e-300),
+                         luminance=luminance)
         if sun is None:
             break
-        light = _as_light(sun, rest, total_luminance)
+        light = _as_light(sun, rest, total_luminance, luminance)
         trial_rest = remove_sun(rest, sun)
         trial = project_equirect(trial_rest)
         estimate = irradiance(trial, n) + light_irradiance([*lights, light], n)
@@ -160,12 +164,12 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
     return Extraction(lights, rest, coeffs, errors)
 
 
-def _median(pixels, solid):
-    return weighted_median(pixels[..., :3].astype(np.float64) @ LUMINANCE, solid[:, None])
+def _median(pixels, solid, luminance):
+    return weighted_median(pixels[..., :3].astype(np.float64) @ luminance, solid[:, None])
 
 
-def _luminance_power(pixels, solid):
-    return float(((pixels[..., :3].astype(np.float64) @ LUMINANCE) * solid[:, None]).sum())
+def _luminance_power(pixels, solid, luminance):
+    return float(((pixels[..., :3].astype(np.float64) @ luminance) * solid[:, None]).sum())
 
 
 def angular_diameter_of(solid_angle):
