@@ -350,7 +350,7 @@ def cmd_compute(args):
 
 
 def read_preset_argument(text, blend):
-    """The (coefficients, metadata) of the PRESET argument (``//`` relative to ``blend``)."""
+    """(path, coefficients) of the PRESET argument (``//`` relative to ``blend``)."""
     from .core.presets import PresetError
 
     path = blend_relative(text, blend, "PRESET")
@@ -561,11 +561,30 @@ def remove_batch_leftovers(out_dir):
                f"run: {', '.join(removed)}")
 
 
+def file_ids(paths):
+    """{(device, inode): path} of the existing files among ``paths`` (links followed)."""
+    ids = {}
+    for path in paths:
+        try:
+            info = path.stat()
+        except OSError:
+            continue
+        ids[info.st_dev, info.st_ino] = path
+    return ids
+
+
 def batch_one(path, out, args, inputs):
-    """Write the preset of HDRI ``path`` to ``out``: "ok" or "skipped"; raises on failure."""
+    """Write the preset of HDRI ``path`` to ``out``: "ok" or "skipped"; raises on failure.
+
+    ``inputs``: ``file_ids`` of every file the batch reads (a preset never replaces one).
+    """
     if not path.is_file():
         raise CommandError(_kind(path))
-    clash = next((p for p in inputs if same_file(out, p)), None)
+    try:
+        info = out.stat()
+        clash = inputs.get((info.st_dev, info.st_ino))
+    except OSError:
+        clash = None
     if clash is not None:
         raise CommandError(f"its preset {out.name} would replace the input {clash.name}")
     if out.exists() and not args.force:
@@ -581,6 +600,7 @@ def cmd_batch(args):
     if not files:
         raise CommandError(f"no file matching {args.pattern} in '{folder}'")
     remove_batch_leftovers(out_dir)
+    inputs = file_ids(files)
     counts = {"ok": 0, "skipped": 0, "failed": 0}
     failed, claimed = [], {}
     start = time.perf_counter()
@@ -592,7 +612,7 @@ def cmd_batch(args):
             if out.name in claimed:
                 raise CommandError(f"its preset name {out.name} is taken by {claimed[out.name]}")
             claimed[out.name] = path.name
-            outcome = batch_one(path, out, args, files)
+            outcome = batch_one(path, out, args, inputs)
         except (CommandError, OSError, ValueError) as error:
             counts["failed"] += 1
             failed.append(path.name)

@@ -4,9 +4,9 @@
 * ``irradiance``: E(n) by the paper's quadratic polynomial (eq. 13) for 9 coefficients, by the
   general sum Σ Â_l L_lm Y_lm(n) (eq. 6) for any other order;
 * ``irradiance_matrices``: the 4×4 M of eq. 12 per colour channel, E(n) = nᵀ M n, n = (x, y, z, 1);
-* ``reference_irradiance``: eq. 1 summed over every texel of an equirectangular map with exact
-  solid angles and the clamped cosine at the texel centre (the ground truth the paper's
-  error claims are measured against).
+* ``reference_irradiance``: eq. 1 summed over every texel of an equirectangular map, each
+  texel's ∫ max(n·ω, 0) dω exact (``texel_cosine``): the ground truth the paper's error
+  claims are measured against, exact for the piecewise-constant map the projection sees.
 
 All coefficients are raw radiance L_lm (not pre-convolved), shape ((order+1)², 3), Blender axes.
 """
@@ -16,8 +16,9 @@ from math import pi, sqrt
 import numpy as np
 
 from .coefficients import check_coefficients as checked_coefficients
-from .equirect import check_finite_pixels, check_pixels, texel_directions, texel_solid_angles
+from .equirect import check_finite_pixels, check_pixels, column_centres
 from .sh import band_of_each_coefficient, lambert_band_factors, order_of, sh_basis, spread_normals
+from .texel_cosine import clamped_cosine_integral, texel_moments
 
 # Eq. 13's constants, in closed form (the paper prints them rounded to 6 digits).
 A0, A1, A2 = lambert_band_factors(2)
@@ -34,8 +35,10 @@ TERM_PEAKS = np.array(
     [C4, 2.0 * C2, 2.0 * C2, 2.0 * C2, C1, C1, max(abs(-C5), abs(C3 - C5)), C1, C1]
 )
 
-# Texel directions times normals are computed in chunks of about this many float64 values.
+# Running sums along rows and arc sums per normal are handled in blocks of about this many values.
 CHUNK_VALUES = 1 << 22
+# Texel-normal pairs given to the exact kernel at a time (its temporaries: ~100 MB).
+KERNEL_PAIRS = 1 << 17
 
 
 def check_coefficients(coeffs):
@@ -95,23 +98,158 @@ def irradiance_matrices(coeffs):
 def reference_irradiance(pixels, normals):
     """Ground-truth E(n) (eq. 1) of an equirectangular map at ``normals`` (..., 3) → (..., 3).
 
-    Σ over every texel of L · max(n·ω, 0) · dΩ with ω the texel centre and dΩ its exact solid
-    angle. Cost O(texels × normals), computed in float64 in chunks of texel rows.
+    Σ over every texel of L · ∫_texel max(n·ω, 0) dω with each texel's integral exact, as the
+    projection integrates each texel exactly: the map is taken as piecewise constant, so a
+    constant map of any size (1×1 included) gives π L to rounding and its 9-term error is 0.
+
+    A texel wholly above n's horizon contributes L n · V, V = ∫_texel ω dω
+    (``texel_cosine.texel_moments``); one wholly below, nothing; the few the horizon may cross
+    (n · V̂ within sin(reach) of 0, reach: how far the texel extends from its mean direction
+    V̂) take the exact kernel ``clamped_cosine_integral``. Texel (i, j) has V = (A_i cos φ_j,
+    A_i sin φ_j, B_i), so in each row the texels above the horizon are one arc of columns and
+    their sum is A_i (n_x Σ L cos φ + n_y Σ L sin φ) + B_i n_z Σ L, from running sums along
+    the row: O(texels + rows × normals + crossing texels), float64, in blocks of rows.
     """
     a = check_pixels(pixels)
     n = _check_normals(normals)
     check_finite_pixels(a)
     height, width, _ = a.shape
     flat_n = n.reshape(-1, 3)
-    radiance = a[..., :3].astype(np.float64) * texel_solid_angles(height, width)[:, None, None]
-    directions = texel_directions(height, width)
-    rows = max(1, CHUNK_VALUES // max(1, flat_n.shape[0] * width))
+    lengths = np.linalg.norm(flat_n, axis=-1)
+    flat_n = flat_n / np.where(lengths > 0.0, lengths, 1.0)[:, None]  # E is linear in |n|
+    theta = np.linspace(0.0, pi, height + 1)
+    z_edges = np.cos(theta)
+    phi_edges = pi - (2.0 * pi / width) * np.arange(width + 1)  # column j: [phi_edges[j+1], [j]]
+    first_column = texel_moments(z_edges[1:], z_edges[:-1], phi_edges[1], phi_edges[0])
+    edge = _horizon_margin(theta, width, first_column)  # (H,): |n · V| ≤ edge may cross
+    phi = column_centres(width)
+    trig = np.stack([np.ones(width), np.cos(phi), np.sin(phi)], axis=-1)  # (W, 3)
+    rows = max(1, CHUNK_VALUES // (9 * max(width + 1, flat_n.shape[0])))
     result = np.zeros((flat_n.shape[0], 3))
+    x, y, z = (flat_n[:, k, None, None] for k in range(3))
     for r0 in range(0, height, rows):
-        cosines = flat_n @ directions[r0 : r0 + rows].reshape(-1, 3).T
-        np.maximum(cosines, 0.0, out=cosines)
-        result += cosines @ radiance[r0 : r0 + rows].reshape(-1, 3)
-    return result.reshape(n.shape[:-1] + (3,))
+        r1 = min(height, r0 + rows)
+        radiance = a[r0:r1, :, :3].astype(np.float64)
+        bounds = _arc_bounds(flat_n, first_column[r0:r1], edge[r0:r1])
+        # running sums along each row of L, L cos φ, L sin φ: (h, W + 1, 3 terms, 3 channels)
+        sums = np.zeros((r1 - r0, width + 1, 3, 3))
+        np.cumsum(radiance[:, :, None, :] * trig[None, :, :, None], axis=1, out=sums[:, 1:])
+        first, count = _above_arcs(bounds, width)
+        end = first + count
+        row = np.arange(r1 - r0)[None, :]
+        wrapped = end > width
+        arc = sums[row, np.minimum(end, width)] - sums[row, first]
+        arc += np.where(wrapped, 1.0, 0.0)[..., None, None] * sums[row, np.where(wrapped,
+                                                                                 end - width, 0)]
+        big_a = np.hypot(first_column[r0:r1, 0], first_column[r0:r1, 1])[None, :, None]
+        big_b = first_column[r0:r1, 2][None, :, None]
+        result += (big_a * (x * arc[:, :, 1] + y * arc[:, :, 2])
+                   + big_b * z * arc[:, :, 0]).sum(axis=1)
+        near = _near_horizon(bounds, width)
+        for p0 in range(0, near[0].size, KERNEL_PAIRS):
+            pair_n, row, col = (index[p0 : p0 + KERNEL_PAIRS] for index in near)
+            kernel = clamped_cosine_integral(flat_n[pair_n], z_edges[row + r0 + 1],
+                                             z_edges[row + r0], phi_edges[col + 1],
+                                             phi_edges[col])
+            for channel in range(3):
+                result[:, channel] += np.bincount(
+                    pair_n, kernel * radiance[row, col, channel], minlength=flat_n.shape[0]
+                )
+    return (result * lengths[:, None]).reshape(n.shape[:-1] + (3,))
+
+
+def _horizon_margin(theta, width, first_column):
+    """Per row, the |n · V| below which the horizon of a unit n may cross a texel of the row.
+
+    Every point of a texel is within reach = (θ distance from the mean direction V̂ to the
+    farther row edge) + max sin θ · Δφ/2 (along its parallel) of V̂, so n·ω there is within
+    sin(reach) of n · V̂ = n · V / |V|. Rows reaching a quarter turn (or with V = 0, the whole
+    sphere of a 1×1 map) always go to the exact kernel.
+    """
+    norm = np.linalg.norm(first_column, axis=-1)
+    theta_v = np.arctan2(np.hypot(first_column[:, 0], first_column[:, 1]), first_column[:, 2])
+    widest = np.maximum(np.sin(theta[:-1]), np.sin(theta[1:]))
+    widest = np.where((theta[:-1] <= 0.5 * pi) & (theta[1:] >= 0.5 * pi), 1.0, widest)
+    reach = np.maximum(theta_v - theta[:-1], theta[1:] - theta_v) + widest * (pi / width)
+    return np.where((reach < 0.5 * pi) & (norm > 0.0),
+                    np.sin(np.minimum(reach, 0.5 * pi)) * norm, np.inf)
+
+
+def _arc_bounds(normals, first_column, edge):
+    """(α, lo, hi), each (N, h): n · V of texel (i, j) is A_i r cos(φ_j − α) + B_i n_z, so
+    n · V > edge where cos(φ − α) > hi, n · V < −edge where cos(φ − α) < lo, and the horizon
+    may cross where lo ≤ cos(φ − α) ≤ hi. A row whose n · V does not vary with φ (r = 0)
+    gets ±inf bounds: all above (hi = lo = −inf), all near (lo = −inf, hi = inf) or all below
+    (hi = lo = inf)."""
+    r = np.hypot(normals[:, 0], normals[:, 1])[:, None]
+    alpha = np.arctan2(normals[:, 1], normals[:, 0])[:, None] + np.zeros_like(edge)
+    scale = np.hypot(first_column[:, 0], first_column[:, 1])[None, :] * r
+    offset = first_column[:, 2][None, :] * normals[:, 2:3]
+    level_hi = np.where(offset > edge, -np.inf, np.inf)
+    level_lo = np.where(offset >= -edge, -np.inf, np.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        hi = np.where(scale > 0, (edge - offset) / scale, level_hi)
+        lo = np.where(scale > 0, (-edge - offset) / scale, level_lo)
+    return alpha, lo, hi
+
+
+def _above_arcs(bounds, width):
+    """(first column, number of columns), (N, h): the texels wholly above each normal's
+    horizon in each row, cos(φ_j − α) > hi: one arc, or every column when hi < −1."""
+    alpha, _, hi = bounds
+    everything = hi < -1.0
+    part = (hi >= -1.0) & (hi < 1.0)
+    half = np.arccos(np.clip(hi, -1.0, 1.0))
+    step = 2.0 * pi / width
+    # column j is above for (j + ½) step in (π − α − half, π − α + half), modulo 2π
+    first = np.floor((pi - alpha - half) / step - 0.5) + 1.0
+    last = np.ceil((pi - alpha + half) / step - 0.5) - 1.0
+    count = np.where(everything, width, np.where(part, np.clip(last - first + 1.0, 0, width), 0))
+    first = np.where(everything, 0.0, first)
+    return np.mod(first, width).astype(np.intp), count.astype(np.intp)
+
+
+def _near_horizon(bounds, width):
+    """(normal, row, column) index arrays of the texels with |n · V| ≤ edge: lo ≤ cos(φ_j − α)
+    ≤ hi holds on at most two arcs of φ per normal and row, whose columns are listed directly
+    (no scan of every pair)."""
+    alpha, lo, hi = bounds
+    empty = (lo > 1.0) | (hi < -1.0)
+    whole = ~empty & (hi >= 1.0) & (lo <= -1.0)
+    one_arc_top = ~empty & ~whole & (hi >= 1.0)  # ψ = φ − α in [−outer, outer]
+    one_arc_bottom = ~empty & ~whole & (lo <= -1.0)  # ψ in [inner, 2π − inner]
+    inner = np.arccos(np.clip(hi, -1.0, 1.0))
+    outer = np.arccos(np.clip(lo, -1.0, 1.0))
+    two = ~(empty | whole | one_arc_top | one_arc_bottom)
+    arcs = [  # (start ψ, end ψ, where)
+        (np.full_like(inner, -pi), np.full_like(inner, pi), whole),
+        (-outer, outer, one_arc_top),
+        (inner, 2.0 * pi - inner, one_arc_bottom),
+        (inner, outer, two),
+        (-outer, -inner, two),
+    ]
+    found = [], [], []
+    step = 2.0 * pi / width
+    for start, end, where in arcs:
+        k, i = np.nonzero(where)
+        if not k.size:
+            continue
+        # Column j's centre is φ_j = π − (j + ½) step; φ in [α + start, α + end].
+        first = np.ceil((pi - (alpha[k, i] + end[k, i])) / step - 0.5).astype(np.int64)
+        last = np.floor((pi - (alpha[k, i] + start[k, i])) / step - 0.5).astype(np.int64)
+        count = np.clip(last - first + 1, 0, width)
+        total = int(count.sum())
+        if not total:
+            continue
+        owner = np.repeat(np.arange(k.size), count)
+        within = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+        found[0].append(k[owner])
+        found[1].append(i[owner])
+        found[2].append((first[owner] + within) % width)
+    if not found[0]:
+        none = np.zeros(0, dtype=np.int64)
+        return none, none, none
+    return tuple(np.concatenate(part) for part in found)
 
 
 def total_power(coeffs):

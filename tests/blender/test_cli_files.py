@@ -332,3 +332,15 @@ def test_hostile_presets_are_one_line_each(inputs, tmp_path):
                                   timeout=60))
         assert expected in line and str(preset) in line
     assert not (tmp_path / "o.blend").exists()
+
+
+def test_the_error_estimate_of_a_constant_1x1_map_is_exact(tmp_path):
+    """Nine terms are exact for constant light: the stored estimate is 0 (it said 28 % mean,
+    75 % max when the reference sampled the one texel at its centre)."""
+    hdri = write_exr(tmp_path / "one.exr", constant_pixels(SKY, height=1, width=1))
+    result = run("compute", hdri, "--out", tmp_path / "one.json")
+    assert result.returncode == 0, result.stderr
+    coeffs, metadata = read_preset(tmp_path / "one.json")
+    assert_allclose(coeffs, EXACT, atol=1e-6)
+    assert metadata["error_estimate"]["max"] < 1e-12
+    assert "mean 0.00 %, max 0.00 %" in result.stdout

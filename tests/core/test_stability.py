@@ -733,11 +733,9 @@ def test_nine_term_irradiance_error_bounds(pixels):
     """REFERENCE.md §2 for any non-negative lighting of power P: |E9 − E| ≤ (3/32) P and
     E9 ≥ −(19/480) P (= −0.03958 P, E9's minimum at u = −8/15).
 
-    E is not available exactly: reference_irradiance takes the cosine at texel centres,
-    which on a 1×1 map is off by up to 3/4 P. So the reference is computed on the same map
-    upsampled k× by replication (the same piecewise-constant lighting) and the bound widened
-    by its discretisation error: max(n·ω, 0) is 1-Lipschitz in ω and every point of a
-    sub-texel is within δ = π/(2kH) + π/(kW) of its centre, so |E_ref − E| ≤ δ P.
+    E is the exact irradiance of the piecewise-constant map: reference_irradiance integrates
+    the clamped cosine over each texel exactly, so the bounds hold to rounding, 1×1 maps
+    included.
     """
     h, w, _ = pixels.shape
     power = 2.0 * sqrt(pi) * project_equirect(pixels)[0]
@@ -747,11 +745,8 @@ def test_nine_term_irradiance_error_bounds(pixels):
     coeffs = project_equirect(pixels)
     n = e9_test_normals(pixels)
     e9 = irradiance(coeffs, n)
-    k = max(1, min(64, int(sqrt(32768 / (h * w)))))
-    fine = np.repeat(np.repeat(pixels, k, axis=0), k, axis=1)
-    e_ref = reference_irradiance(fine, n)
-    delta = pi / (2 * k * h) + pi / (k * w)
-    assert (np.abs(e9 - e_ref) <= (3 / 32 + delta + 1e-12) * power).all()
+    e_ref = reference_irradiance(pixels, n)
+    assert (np.abs(e9 - e_ref) <= (3 / 32 + 1e-12) * power).all()
     assert (e9 >= -(19 / 480 + 1e-12) * power).all()
     # the constant term of eq. 13 cannot nearly cancel for non-negative lighting:
     # max Y20 = √5 Y00, so L20 ≤ √5 L00 and c5 L20 ≤ (√5/8)·√5 c4 L00 = (5/8) c4 L00
