@@ -1,10 +1,24 @@
 """Shared test helpers: paths of the reference data and of the HDRIs that ship inside bpy."""
 
+import atexit
 import os
+import shutil
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
+
+# Nothing a test runs may touch the real Blender configuration: Blender's user folder (config,
+# scripts, presets, extensions) is a temporary folder for the whole session, set before bpy
+# is first imported. Tests that need their own point BLENDER_USER_RESOURCES elsewhere; the
+# command-line tests also give their processes a temporary HOME (tests/cli_runs.py).
+USER_SANDBOX = tempfile.mkdtemp(prefix="sh_lighting_test_user_")
+atexit.register(shutil.rmtree, USER_SANDBOX, ignore_errors=True)
+os.environ["BLENDER_USER_RESOURCES"] = USER_SANDBOX
+for _name in ("BLENDER_USER_CONFIG", "BLENDER_USER_SCRIPTS", "BLENDER_USER_DATAFILES",
+              "BLENDER_USER_EXTENSIONS"):
+    os.environ.pop(_name, None)
 
 ROOT = Path(__file__).resolve().parent.parent
 SHARED_DATA = ROOT.parent / "shared" / "data"

@@ -344,3 +344,11 @@ def test_the_error_estimate_of_a_constant_1x1_map_is_exact(tmp_path):
     assert_allclose(coeffs, EXACT, atol=1e-6)
     assert metadata["error_estimate"]["max"] < 1e-12
     assert "mean 0.00 %, max 0.00 %" in result.stdout
+
+
+def test_an_hdri_beyond_float32_is_refused_not_rendered_black(tmp_path):
+    """1e38 texels: L00 = 2√π·1e38 = 3.5e38 would be infinite in Blender's float32."""
+    hdri = write_exr(tmp_path / "huge.exr", constant_pixels((1e38, 1e38, 1e38)))
+    line = one_error_line(run("compute", hdri, "--out", tmp_path / "huge.json"))
+    assert "coefficient L00 channel R is 3.54491e+38, beyond the float32 range" in line
+    assert not (tmp_path / "huge.json").exists()
