@@ -227,3 +227,40 @@ def run_execute(cls, **props):
     if hasattr(cls, "apply"):  # design operators split execute and apply
         recorder.apply = lambda scene: cls.apply(recorder, scene)
     return cls.execute(recorder, bpy.context), recorder.reports
+
+
+# ---------------------------------------------------------------- panels without a UI
+
+
+class Operator:
+    """What ``layout.operator`` returns: takes the properties the panel sets."""
+
+
+class RecordingLayout:
+    """Stands in for UILayout (no UI headless): records what is drawn, returns itself."""
+
+    def __init__(self, calls):
+        self.calls = calls
+        self.use_property_split = False
+        self.use_property_decorate = True
+        self.active = True
+        self.alignment = "EXPAND"
+
+    def _child(self, *args, **kwargs):
+        return RecordingLayout(self.calls)
+
+    column = row = box = split = _child
+
+    def prop(self, data, path, **kwargs):
+        self.calls.append(("prop", data, path, kwargs))
+
+    def operator(self, idname, **kwargs):
+        props = Operator()
+        self.calls.append(("operator", idname, props))
+        return props
+
+    def label(self, text="", icon="NONE"):
+        self.calls.append(("label", text, icon))
+
+    def template_icon(self, icon_value=0, scale=1.0):
+        self.calls.append(("icon", icon_value, scale))

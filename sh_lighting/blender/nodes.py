@@ -224,7 +224,9 @@ def _factors(b, n):
     cross.inputs["Scale"].default_value = 2.0 * C1
     cross_xyz = b.node("ShaderNodeSeparateXYZ", 9, 0, "2c1 xy, 2c1 yz, 2c1 zx")
     b.link(cross.outputs["Vector"], cross_xyz.inputs[0])
-    factors.update({4: cross_xyz.outputs["X"], 5: cross_xyz.outputs["Y"], 7: cross_xyz.outputs["Z"]})
+    factors.update(
+        {4: cross_xyz.outputs["X"], 5: cross_xyz.outputs["Y"], 7: cross_xyz.outputs["Z"]}
+    )
 
     squares = b.vector_math("MULTIPLY", 7, 2, "x² y² z²")
     b.link(n, squares.inputs[0])

@@ -149,7 +149,9 @@ def preset_file_name(name):
 
 def scene_metadata(scene):
     """What is known about where the scene's current coefficients came from (may be empty
-    apart from ``created``); see the module docstring.
+    apart from ``created``): the provenance ``store`` recorded when they were computed from a
+    world image (its file, Mapping rotation and Strength), while the values are still exactly
+    those (nothing is read from the world now, which may have changed since).
     """
     metadata = {"created": date.today().isoformat()}
     computed = scene_data.get_computed(scene)
@@ -157,19 +159,16 @@ def scene_metadata(scene):
         return metadata
     if not np.array_equal(computed, scene_data.get_coefficients(scene)):
         return metadata  # edited or loaded since: the world is not their source
-    try:  # the world reader (no pixels); a broken world only means "unknown"
-        source = world_module.read_world(scene)
-    except world_module.WorldError:
+    record = scene_data.provenance(scene)
+    if record.get("source") != "WORLD" or "edit" in record or record.get("method") != "IMAGE":
         return metadata
-    if not isinstance(source, world_module.ImageSource):
-        return metadata
-    image = source.image
-    path = bpy.path.abspath(image.filepath, library=image.library) if image.filepath else ""
     # the file name only: an absolute local path would leak into files people share
-    name = os.path.basename(os.path.normpath(path)) if path else ""
-    metadata["source"] = name or f"image '{image.name}'"
-    metadata["mapping"] = list(source.rotation) if source.rotation is not None else [0.0, 0.0, 0.0]
-    metadata["strength"] = source.strength
+    name = os.path.basename(record["path"]) if record.get("path") else ""
+    metadata["source"] = name or f"image '{record.get('image')}'"
+    metadata["mapping"] = list(record.get("rotation", (0.0, 0.0, 0.0)))
+    metadata["strength"] = record.get("strength")
+    if record.get("sun"):
+        metadata["notes"] = f"the sun was split off as the light '{record['sun']}'"
     return metadata
 
 

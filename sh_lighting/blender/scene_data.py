@@ -93,10 +93,10 @@ def store(scene, coeffs, provenance):
     """Write (9, 3) L_lm on ``scene`` as c = ``coeffs``, s = 1: the one write of coefficients.
 
     ``provenance``: a dict with "source" (``SOURCES``) and what the writer knows of it; a
-    "WORLD" record without "edit" (values as computed) also makes them the Reset values. Validates first (ValueError, nothing
-    changed), then writes, records, sets the UI data, tags the scene for the depsgraph (the
-    viewports and the next render see the new values) and redraws the panels. Returns the
-    stored float64 copy.
+    "WORLD" record without "edit" (values as computed) also makes them the Reset values.
+    Validates first (ValueError, nothing changed), then writes, records, sets the UI data,
+    tags the scene for the depsgraph (the viewports and the next render see the new values)
+    and redraws the panels. Returns the stored float64 copy.
     """
     c = validate(coeffs)
     record = _check_provenance(provenance)

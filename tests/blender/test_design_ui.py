@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from blender_files import SCRIPT, WORLD, write_exr
 from blender_scenes import (
-    EULER, STRENGTH, SUN_IMAGE_DIRECTION, SUN_RADIANCE, SUN_RGB, H, W, add_mapping,
-    environment_world, run_execute, sky_map, sunny_map,
+    EULER, STRENGTH, SUN_IMAGE_DIRECTION, SUN_RADIANCE, SUN_RGB, H, W, RecordingLayout,
+    add_mapping, environment_world, run_execute, sky_map, sunny_map,
 )
 from numpy.testing import assert_allclose, assert_array_equal
 
@@ -532,40 +532,6 @@ def test_previews_collection_is_removed_on_unregister_without_leaks():
 
 
 # -- the Design sub-panel ----------------------------------------------------------------------
-
-
-class Operator:
-    """What ``layout.operator`` returns: takes the properties the panel sets."""
-
-
-class RecordingLayout:
-    """Stands in for UILayout (no UI headless): records what is drawn, returns itself."""
-
-    def __init__(self, calls):
-        self.calls = calls
-        self.use_property_split = False
-        self.use_property_decorate = True
-        self.active = True
-        self.alignment = "EXPAND"
-
-    def _child(self, *args, **kwargs):
-        return RecordingLayout(self.calls)
-
-    column = row = box = split = _child
-
-    def prop(self, data, path, **kwargs):
-        self.calls.append(("prop", data, path, kwargs))
-
-    def operator(self, idname, **kwargs):
-        props = Operator()
-        self.calls.append(("operator", idname, props))
-        return props
-
-    def label(self, text="", icon="NONE"):
-        self.calls.append(("label", text, icon))
-
-    def template_icon(self, icon_value=0, scale=1.0):
-        self.calls.append(("icon", icon_value, scale))
 
 
 def draw(context):

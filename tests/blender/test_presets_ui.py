@@ -157,6 +157,9 @@ def test_metadata_names_the_world_image_while_the_values_are_the_computed_ones(a
     metadata = read_preset(preset_io.export_preset(scene, tmp_path / "a.json"))[1]
     assert metadata["source"] == "sky.exr"  # the file name only: no local path in shared files
     assert metadata["strength"] == 3.0 and metadata["mapping"] == [0.0, 0.0, 0.0]
+    background.inputs["Strength"].default_value = 5.0  # changed since, not recomputed:
+    metadata = read_preset(preset_io.export_preset(scene, tmp_path / "a2.json"))[1]
+    assert metadata["strength"] == 3.0  # what the values were computed from (provenance)
 
     coeffs = scene_data.get_coefficients(scene)
     coeffs[0, 0] += 0.25  # an edit: the image is no longer the whole story

@@ -6,6 +6,7 @@ and everything gone again after unregister.
 import bpy
 import pytest
 from blender_files import SCRIPT
+from blender_scenes import RecordingLayout
 
 from sh_lighting import blender
 from sh_lighting.blender import operators, panels, scene_data
@@ -92,30 +93,6 @@ def test_coefficient_custom_properties_get_ui_data(addon):
         assert "strength" in gain["description"] and gain["min"] < -1e30
     scene_data.store(scene, [[0.01, 0.02, -0.03]] * 9, SCRIPT)  # the drag range follows
     assert scene.id_properties_ui("sh_L10").as_dict()["soft_max"] == pytest.approx(0.06)
-
-
-class RecordingLayout:
-    """Stands in for UILayout (no UI headless): records prop/operator calls, returns itself."""
-
-    def __init__(self, calls):
-        self.calls = calls
-        self.use_property_split = False
-        self.use_property_decorate = True
-        self.active = True
-
-    def _child(self, *args, **kwargs):
-        return RecordingLayout(self.calls)
-
-    column = row = box = split = _child
-
-    def prop(self, data, path, **kwargs):
-        self.calls.append(("prop", data, path, kwargs))
-
-    def operator(self, idname, **kwargs):
-        self.calls.append(("operator", idname, kwargs))
-
-    def label(self, **kwargs):
-        self.calls.append(("label", kwargs.get("text", "")))
 
 
 def test_panels_draw_resolvable_properties_and_operators(addon):
