@@ -7,7 +7,7 @@ LTS_VENV  := .venv-lts
 LTS_STAMP := $(LTS_VENV)/.installed
 HDRI ?=
 
-.PHONY: demo test test-lts bench package clean
+.PHONY: demo test test-lts test-gui bench package clean
 
 $(STAMP): requirements.txt
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +30,13 @@ test: $(STAMP)
 # The same suite on Blender 4.2 LTS (the oldest version the manifest promises).
 test-lts: $(LTS_STAMP)
 	$(LTS_VENV)/bin/python -m pytest
+
+# The add-on in a real Blender window, driven by clicks and key presses (tests/gui): on this
+# machine Debian's Blender 4.3 in ../shared/tools/blender-gui-root (needs root);
+# `make test-gui BLENDER=/path/to/blender` runs that Blender (4.2+) on an Xvfb screen instead.
+BLENDER ?=
+test-gui: $(STAMP)
+	SH_GUI_BLENDER=$(BLENDER) $(PY) -m pytest -m gui tests/gui
 
 BENCH_STAMP := $(VENV)/.installed-bench
 $(BENCH_STAMP): $(STAMP) requirements-bench.txt

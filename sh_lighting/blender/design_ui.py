@@ -1,26 +1,23 @@
-"""Lighting design in the UI: see the basis, rotate the light, tame ringing, split off the sun.
+"""Lighting design in the UI: rotate the light, change its exposure and colour, tame ringing,
+split off the sun, see the basis.
 
 Operators (all undoable, with polls that say why they are disabled) hand plain values to
-``design`` and turn its errors into an ERROR report with nothing changed. The "Design"
-sub-panel, under both SH Lighting panels, shows the 9 basis functions (the paper's figure 4)
-and the irradiance sphere of the current coefficients (``previews``), the negative-light
-warning, what each coefficient does, and the buttons.
+``design`` and turn its errors into an ERROR report with nothing changed. Rotate, Exposure,
+Saturation and Band Gains open a live popup: every change of a value redoes the edit at once
+(undo and execute, as the redo panel does), and F9 / Adjust Last Operation changes it again
+afterwards. The "Design" sub-panel holds the buttons; the "Basis Functions" sub-panel (closed
+by default) the paper's figure 4. The irradiance sphere is at the top of the main panel.
 """
 
 import math
-import textwrap
 
 import bpy
 
-from ..core.edits import describe_coefficients
 from ..core.minimum import negative_light_warning
-from . import design, lights_ui, panels, previews, scene_data
+from . import design, lights_ui, panels, previews, scene_data, world
 from .polls import NO_COEFFICIENTS, coefficients_poll, scene_poll
 
-WARNING_WIDTH = 44  # characters per line of the wrapped warning
-BASIS_SCALE = 3.0
-IRRADIANCE_SCALE = 7.0
-BAND_LABELS = ("l = 0", "l = 1", "l = 2")
+BASIS_SCALE = 3.0  # largest icon size, in UI units; smaller when 5 do not fit the width
 
 
 class _Edit:
@@ -43,35 +40,20 @@ class _Edit:
         return {"FINISHED"}
 
 
-class _Dialog:
-    """Mixin: from a button, ask for the settings first (the Properties editor has no redo
-    panel); scripts calling with EXEC_DEFAULT run at once."""
+class _Live:
+    """Mixin: from a button, a popup whose every change redoes the edit at once (the
+    Properties editor has no redo panel); scripts calling with EXEC_DEFAULT run at once."""
 
     def invoke(self, context, event):
-        return context.window_manager.invoke_props_dialog(self)
+        return context.window_manager.invoke_props_popup(self, event)
 
 
-class SHLIGHT_OT_rotate(_Dialog, _Edit, bpy.types.Operator):
-    """Rotate the SH lighting exactly (band by band), by yaw, pitch and roll or by the world's
-    Mapping node rotation"""
+class SHLIGHT_OT_rotate(_Live, _Edit, bpy.types.Operator):
+    """Rotate the SH lighting exactly (band by band) by yaw, pitch and roll"""
 
     bl_idname = "shlight.rotate"
     bl_label = "Rotate Lighting"
 
-    mode: bpy.props.EnumProperty(
-        name="Rotate By",
-        description="Where the rotation comes from",
-        items=(
-            ("ANGLES", "Angles", "Yaw about +Z, then pitch about +X, then roll about +Y"),
-            (
-                "MAPPING",
-                "Match Mapping Node",
-                "The world's Mapping node rotation, as Blender renders it: for coefficients "
-                "computed from the image without that rotation",
-            ),
-        ),
-        default="ANGLES",
-    )
     yaw: bpy.props.FloatProperty(
         name="Yaw", description="Turn about the vertical +Z axis (+90° takes +X to +Y)",
         subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau,
@@ -85,29 +67,49 @@ class SHLIGHT_OT_rotate(_Dialog, _Edit, bpy.types.Operator):
         subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau,
     )
 
-    def invoke(self, context, event):
-        if self.mode == "MAPPING":
-            return self.execute(context)
-        return super().invoke(context, event)
+    def apply(self, scene):
+        design.rotate(scene, self.yaw, self.pitch, self.roll)
 
-    def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.prop(self, "mode")
-        col = layout.column(align=True)
-        col.active = self.mode == "ANGLES"
-        for name in ("yaw", "pitch", "roll"):
-            col.prop(self, name)
+
+def mapping_problem(context):
+    """Why Match Mapping can only fail here (a sentence), or None when it can work."""
+    if not scene_data.has_coefficients(context.scene):
+        return NO_COEFFICIENTS
+    try:
+        source = panels.read_world(context)
+    except ValueError as why:  # WorldError: no world, no image, ...
+        return str(why)
+    if isinstance(source, world.ProceduralSource):
+        return f"Needs an Environment Texture world image; {source.reason}"
+    if source.rotation is None:
+        return (f"World '{source.world}' has no Texture Coordinate → Mapping in front of its "
+                "Environment Texture: no rotation to match")
+    return None
+
+
+class SHLIGHT_OT_match_mapping(_Edit, bpy.types.Operator):
+    """Rotate the SH lighting by the world's Mapping node rotation, as Blender renders it:
+    for coefficients computed from the image without that rotation"""
+
+    bl_idname = "shlight.match_mapping"
+    bl_label = "Match Mapping"
+
+    @classmethod
+    def poll(cls, context):
+        if not scene_poll(cls, context):
+            return False
+        problem = mapping_problem(context)
+        if problem:
+            cls.poll_message_set(problem)
+            return False
+        return True
 
     def apply(self, scene):
-        if self.mode == "MAPPING":
-            design.match_mapping(scene)
-            return "SH lighting rotated by the world's Mapping node rotation"
-        design.rotate(scene, self.yaw, self.pitch, self.roll)
-        return None
+        design.match_mapping(scene)
+        return "SH lighting rotated by the world's Mapping node rotation"
 
 
-class SHLIGHT_OT_exposure(_Edit, bpy.types.Operator):
+class SHLIGHT_OT_exposure(_Live, _Edit, bpy.types.Operator):
     """Make the SH lighting brighter or darker by photographic stops (×2 per stop)"""
 
     bl_idname = "shlight.exposure"
@@ -115,14 +117,14 @@ class SHLIGHT_OT_exposure(_Edit, bpy.types.Operator):
 
     stops: bpy.props.FloatProperty(
         name="Stops", description="Brightness change in stops: +1 doubles the light",
-        default=1.0, soft_min=-10.0, soft_max=10.0, step=50,
+        default=0.0, soft_min=-4.0, soft_max=4.0, step=10,
     )
 
     def apply(self, scene):
         design.exposure(scene, self.stops)
 
 
-class SHLIGHT_OT_saturation(_Dialog, _Edit, bpy.types.Operator):
+class SHLIGHT_OT_saturation(_Live, _Edit, bpy.types.Operator):
     """Blend the colour of the SH lighting toward grey (or away from it), keeping its
     brightness"""
 
@@ -151,7 +153,7 @@ class SHLIGHT_OT_saturation(_Dialog, _Edit, bpy.types.Operator):
         design.saturation(scene, self.amount, self.band)
 
 
-class SHLIGHT_OT_band_gains(_Dialog, _Edit, bpy.types.Operator):
+class SHLIGHT_OT_band_gains(_Live, _Edit, bpy.types.Operator):
     """Scale the ambient (l = 0), directional (l = 1) and quadratic (l = 2) terms of the
     lighting separately"""
 
@@ -208,6 +210,21 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
         default=design.DEFAULT_WIDTH, min=0.01, soft_min=1.0, soft_max=10.0,
     )
 
+    @classmethod
+    def description(cls, context, props):
+        """The docstring, or for Minimal the negative-light warning it removes (the panel's
+        warning button)."""
+        scene = context.scene
+        if props.kind == "MINIMAL" and scene is not None and scene_data.has_coefficients(scene):
+            try:
+                warning = negative_light_warning(scene_data.get_coefficients(scene))
+            except ValueError:
+                warning = ""
+            if warning:
+                return (f"{warning}.\nClick: the least smoothing that makes the irradiance "
+                        "non-negative for every normal")
+        return cls.bl_rna.description
+
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
@@ -217,7 +234,7 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
         row.prop(self, "width")
 
     def apply(self, scene):
-        return design.apply_window(scene, self.kind, self.width).report()
+        return window_report(design.apply_window(scene, self.kind, self.width))
 
 
 class SHLIGHT_OT_split_sun(_Edit, bpy.types.Operator):
@@ -240,61 +257,59 @@ class SHLIGHT_OT_split_sun(_Edit, bpy.types.Operator):
         info = design.split_sun(scene)
         if info is None:
             return "No sun found in the world image: nothing changed"
-        d = ", ".join(f"{v:+.3f}" for v in info.direction)
         verb = "created" if info.created else "updated"
         return (
-            f"Sun light '{info.light}' {verb}: toward ({d}), {info.strength:.4g} W/m², "
-            f"{info.power_fraction:.0%} of the world's light; the coefficients hold the rest"
+            f"Sun light '{info.light}' {verb} ({info.strength:.3g} W/m², "
+            f"{info.power_fraction:.0%} of the world's light); SH lighting keeps the rest"
         )
 
 
-# -- the Design sub-panel ----------------------------------------------------------------------
+def window_report(result):
+    """One readable line about a ``design.WindowResult``: the band factors and, when known,
+    the error against the world image with and without the window."""
+    w = result.window
+    text = (f"{design.LABELS[result.kind]} window applied: directional ×{w[1]:.2f}, "
+            f"quadratic ×{w[2]:.2f}")
+    cost = result.cost
+    if cost is not None:
+        text += (f"; error vs the world image {100 * cost.windowed_mean.max():.1f} % of its "
+                 f"light (without: {100 * cost.plain_mean.max():.1f} %)")
+    return text
 
 
-def draw_basis(layout):
-    """The 9 Y_lm as in figure 4: one row per band, green positive, blue negative."""
-    col = layout.column(align=True)
-    col.label(text="Basis functions (green +, blue −)")
+# -- the Design and Basis Functions sub-panels ---------------------------------------------
+
+
+def draw_basis(layout, context):
+    """The 9 Y_lm as in figure 4: one row per band (l = 0, 1, 2), green positive, blue
+    negative; the icons shrink together so that the five of l = 2 fit the panel."""
+    region = getattr(context, "region", None)
+    width = region.width if region is not None and region.width > 1 else 300
+    unit = 20.0 * panels.ui_scale(context)
+    scale = max(1.0, min(BASIS_SCALE, (width - 40) / (5 * unit) - 0.2))
+    panels.wrapped(layout, context, "Rows l = 0, 1, 2 (L00; L1-1 L10 L11; L2-2 … L22): "
+                   "green positive, blue negative")
     icons = previews.basis()
-    for band, label in enumerate(BAND_LABELS):
+    col = layout.column(align=True)
+    for band in range(3):
         row = col.row(align=True)
         row.alignment = "CENTER"
         for k in range(band * band, (band + 1) * (band + 1)):
-            row.template_icon(icon_value=icons[k].icon_id, scale=BASIS_SCALE)
-        row.label(text=label)
+            row.template_icon(icon_value=icons[k].icon_id, scale=scale)
 
 
-def draw_lighting(layout, scene):
-    """The irradiance sphere, the negative-light warning and the words for each coefficient."""
-    coeffs = scene_data.get_coefficients(scene)
-    col = layout.column(align=True)
-    col.label(text="White sphere, front view, Film exposure")
-    preview = previews.irradiance(coeffs, scene.view_settings.exposure)
-    col.template_icon(icon_value=preview.icon_id, scale=IRRADIANCE_SCALE)
-    warning = negative_light_warning(coeffs)  # design.negative_warning, without a 2nd read
-    if warning:
-        box = layout.box().column(align=True)
-        for i, line in enumerate(textwrap.wrap(warning, WARNING_WIDTH)):
-            box.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
-    col = layout.column(align=True)
-    for line in describe_coefficients(coeffs, design.luminance()):  # design.describe
-        col.label(text=line)
-
-
-def draw_buttons(layout):
+def draw_design(layout, context):
+    """The Design sub-panel (both places): the edit buttons."""
     col = layout.column(align=True)
     row = col.row(align=True)
-    row.operator("shlight.rotate", text="Rotate", icon="ORIENTATION_GIMBAL").mode = (
-        "ANGLES"
-    )
-    row.operator("shlight.rotate", text="Match Mapping", icon="WORLD").mode = "MAPPING"
+    row.operator("shlight.rotate", text="Rotate", icon="ORIENTATION_GIMBAL")
+    row.operator("shlight.match_mapping", icon="WORLD")
     row = col.row(align=True)
-    row.operator("shlight.exposure", text="−1 Stop").stops = -1.0
-    row.operator("shlight.exposure", text="+1 Stop").stops = 1.0
-    row = col.row(align=True)
+    row.operator("shlight.exposure", icon="LIGHT_SUN")
     row.operator("shlight.saturation", icon="COLOR")
+    row = col.row(align=True)
     row.operator("shlight.band_gains")
-    col.operator("shlight.flip_vertical", icon="MOD_MIRROR")
+    row.operator("shlight.flip_vertical", icon="MOD_MIRROR")
 
     col = layout.column(align=True)
     col.label(text="Tame ringing")
@@ -306,27 +321,17 @@ def draw_buttons(layout):
     lights_ui.draw_lights(row)
 
 
-def draw_design(layout, context):
-    """The Design sub-panel (both places): previews, warning, words, buttons."""
-    scene = context.scene
-    draw_basis(layout)
-    if scene_data.has_coefficients(scene):
-        try:
-            draw_lighting(layout, scene)
-        except ValueError as error:  # e.g. coefficients typed in as NaN
-            layout.label(text=str(error), icon="ERROR")
-    else:
-        layout.label(text=NO_COEFFICIENTS, icon="INFO")
-    draw_buttons(layout)
-
-
 SHLIGHT_PT_world_design, SHLIGHT_PT_view3d_design = panels.sub_panels(
     "design", "Design", draw_design, options={"DEFAULT_CLOSED"}
+)
+SHLIGHT_PT_world_basis, SHLIGHT_PT_view3d_basis = panels.sub_panels(
+    "basis", "Basis Functions", draw_basis, options={"DEFAULT_CLOSED"}
 )
 
 
 classes = (
     SHLIGHT_OT_rotate,
+    SHLIGHT_OT_match_mapping,
     SHLIGHT_OT_exposure,
     SHLIGHT_OT_saturation,
     SHLIGHT_OT_band_gains,
@@ -335,6 +340,8 @@ classes = (
     SHLIGHT_OT_split_sun,
     SHLIGHT_PT_world_design,
     SHLIGHT_PT_view3d_design,
+    SHLIGHT_PT_world_basis,
+    SHLIGHT_PT_view3d_basis,
 )
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
 
@@ -347,4 +354,3 @@ def register():
 def unregister():
     _unregister_classes()
     previews.unregister()
-

@@ -58,6 +58,7 @@ MODE_ITEMS = (
      "Drive the surface by the SH emission alone: exact and noise free, no lamps or "
      "reflections"),
 )
+GROUP_NODE_WIDTH = 200.0  # px in the node editor: "SH Irradiance" and its sockets in full
 
 # BSDF node type -> its diffuse colour input.
 BASE_COLOUR_INPUTS = {
@@ -284,7 +285,11 @@ def _apply(material, plan, group, mode):
             raise TypeError(f"'{group.name}' is not a shader node group")
         node.name = GROUP_NAME
         node.label = GROUP_NAME
-        node.location = (plan.active.location.x - 40.0, plan.active.location.y + 260.0)
+        # Left of the Material Output and above its inputs: a short forward wire into
+        # Surface, wide enough for the full name.
+        node.width = GROUP_NODE_WIDTH
+        node.location = (plan.active.location.x - GROUP_NODE_WIDTH - 60.0,
+                         plan.active.location.y + 220.0)
         node[NODE_MARKER] = json.dumps(record)
         weight = None
         if mode == "KEEP_BSDF":

@@ -1,35 +1,120 @@
 """The "SH Lighting" panel, in World Properties and in the 3D Viewport sidebar.
 
-Both places draw with the same functions; the "Coefficients" sub-panel shows, per L_lm, what
-it does, its gain s_lm and its three channels c_lm: the scene's custom properties themselves
-(``scene_data``: keyframable, read by materials at render time; the lighting is s_lm · c_lm).
+Both places draw with the same functions. From the top: the presets (a popover in the panel
+header, as Blender's own preset menus), the irradiance sphere of the current lighting (what an
+artist watches while editing) with the negative-light warning, Compute / Reset, the capture
+width (procedural worlds only: an image world is read directly), Apply / Remove.
+
+The "Coefficients" sub-panel has one line per L_lm: its name (a flat button whose tooltip says
+what the coefficient does now and which shows or hides its R, G, B values), a swatch of the
+triple's colour c_lm and its signed strength, the gain s_lm, to drag, type or keyframe (both
+are the scene's custom properties of ``scene_data``, read by materials at render time; the
+lighting is s_lm · c_lm).
+
+Texts wrap to the panel's width (``wrapped``); what does not fit on one line lives in
+tooltips. Nothing here writes coefficients: fields and buttons go through the properties and
+operators that do.
 """
+
+import textwrap
 
 import bpy
 
-from ..core.sh import COEFFICIENT_NAMES
-from ..core.sh import COEFFICIENT_PHRASES
-from . import scene_data
+from ..core.edits import describe_coefficients
+from ..core.minimum import negative_light_warning
+from ..core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
+from . import design, presets_ui, previews, scene_data, world
 
 CHANNELS = "RGB"
+# What each coefficient does, in a few characters (the full wording is in the tooltips).
+SHORT_PHRASES = ("ambient", "±Y", "up/down", "±X", "xy", "yz", "poles", "xz", "x²−y²")
+IRRADIANCE_SCALE = 6.0  # the sphere: 6 UI units (120 px at scale 1)
+CHARACTER_WIDTH = 6.5  # mean width of a UI character in px at scale 1 (Blender's default font)
+SHOW_CHANNELS = "sh_lighting_show_channels"  # WindowManager: which rows show R, G, B
+
+
+def wrapped(layout, context, text, icon="NONE"):
+    """``text`` as labels wrapped to the width of the region being drawn (one per line)."""
+    region = getattr(context, "region", None)
+    width = region.width if region is not None and region.width > 1 else 300
+    scale = ui_scale(context)
+    indent = 0 if icon == "NONE" else 22
+    chars = max(16, int((width - 60 - indent) / (CHARACTER_WIDTH * scale)))
+    col = layout.column(align=True)
+    for i, line in enumerate(textwrap.wrap(text, chars) or [""]):
+        col.label(text=line, icon=icon if i == 0 else ("BLANK1" if icon != "NONE" else "NONE"))
+    return col
+
+
+def ui_scale(context):
+    """The UI scale (1 when there is none: background mode reports 0)."""
+    scale = context.preferences.system.ui_scale if context.preferences else 0.0
+    return scale if scale > 0.0 else 1.0
+
+
+def read_world(context):
+    """``world.read_world`` of the context's scene as its view layer's depsgraph last
+    evaluated it (drawing and polls must not trigger an evaluation); a WorldError for a
+    world that gives no lighting."""
+    depsgraph = context.view_layer.depsgraph if context.view_layer is not None else None
+    return world.read_world(context.scene, depsgraph)
+
+
+def world_kind(context):
+    """"image" (read directly), "procedural" (captured by a Cycles render) or "none"."""
+    try:
+        source = read_world(context)
+    except world.WorldError:
+        return "none"
+    return "procedural" if isinstance(source, world.ProceduralSource) else "image"
+
+
+def draw_sphere(layout, context, coeffs):
+    """The irradiance sphere of ``coeffs``, centred, and the negative-light warning."""
+    scene = context.scene
+    try:
+        preview = previews.irradiance(coeffs, scene.view_settings.exposure)
+    except ValueError as error:  # e.g. coefficients typed in as NaN
+        wrapped(layout, context, str(error), icon="ERROR")
+        return
+    col = layout.column(align=True)
+    row = col.row()
+    row.alignment = "CENTER"
+    row.template_icon(icon_value=preview.icon_id, scale=IRRADIANCE_SCALE)
+    # One line under the sphere either way (the panel does not jump while dragging): the
+    # negative-light warning as a button that smooths it (the whole warning in its tooltip),
+    # or what the sphere shows.
+    row = col.row()
+    if negative_light_warning(coeffs):
+        row.alert = True
+        op = row.operator("shlight.window", text="Negative light: smooth it", icon="ERROR")
+        op.kind = "MINIMAL"
+    else:
+        row.alignment = "CENTER"
+        row.label(text="White sphere, front view")
 
 
 def draw_main(layout, context):
-    """Buttons and settings: Compute / Reset, capture width, Apply / Remove with their target."""
+    """Sphere, Compute / Reset, capture width (procedural worlds), Apply / Remove."""
     scene = context.scene
     settings = scene.sh_lighting
     layout.use_property_split = True
     layout.use_property_decorate = False
+    if scene_data.has_coefficients(scene):
+        draw_sphere(layout, context, scene_data.get_coefficients(scene))
 
-    col = layout.column(align=True)
-    col.operator("shlight.compute_from_world", icon="WORLD")
-    col.operator("shlight.reset", icon="LOOP_BACK")
+    row = layout.row(align=True)
+    row.scale_y = 1.2
+    split = row.split(factor=0.68, align=True)
+    split.operator("shlight.compute_from_world", icon="WORLD")
+    split.operator("shlight.reset", icon="LOOP_BACK")
 
-    row = layout.row(heading="Capture Width")
-    row.prop(settings, "use_capture_width", text="")
-    sub = row.row()
-    sub.active = settings.use_capture_width
-    sub.prop(settings, "capture_width", text="")
+    if world_kind(context) == "procedural":
+        row = layout.row(heading="Capture Width")
+        row.prop(settings, "use_capture_width", text="")
+        sub = row.row()
+        sub.active = settings.use_capture_width
+        sub.prop(settings, "capture_width", text="")
 
     layout.prop(settings, "apply_target", expand=True)
     row = layout.row(align=True)
@@ -37,24 +122,74 @@ def draw_main(layout, context):
     row.operator("shlight.remove", text="Remove", icon="X")
 
 
+def draw_presets_header(layout, context):
+    """The presets popover in the panel header (``presets_ui.SHLIGHT_PT_presets``), labelled
+    with the preset the scene's values come from, if any."""
+    label = presets_ui.menu_label(context.scene)
+    layout.emboss = "NONE"
+    layout.popover(panel="SHLIGHT_PT_presets", icon="PRESET",
+                   text="" if label == presets_ui.PRESETS_LABEL else label)
+
+
 def draw_coefficients(layout, context):
-    """One block per coefficient: name and meaning, its gain, R G B: custom-property fields."""
+    """One line per coefficient: name (tooltip: what it does), swatch, strength; R G B when
+    the line is open."""
     scene = context.scene
     if not scene_data.has_coefficients(scene):
-        col = layout.column(align=True)
-        col.label(text="No coefficients yet", icon="INFO")
-        col.label(text="Compute from World, or set them from Python")
+        wrapped(layout, context, "No coefficients yet: press Compute from World or load a "
+                "preset (header menu)", icon="INFO")
         return
+    coeffs = scene_data.get_coefficients(scene)
+    shown = getattr(context.window_manager, SHOW_CHANNELS, (False,) * 9)
+    col = layout.column(align=True)
     for index, name in enumerate(COEFFICIENT_NAMES):
-        col = layout.column(align=True)
-        col.label(text=f"{name}: {COEFFICIENT_PHRASES[index]}")
-        gain = scene_data.GAIN_NAMES[index]
-        if gain in scene:
-            col.prop(scene, f'["{gain}"]', text="Gain")
         row = col.row(align=True)
-        path = f'["{scene_data.PROPERTY_NAMES[index]}"]'
-        for channel, letter in enumerate(CHANNELS):
-            row.prop(scene, path, index=channel, text=letter)
+        split = row.split(factor=0.42, align=True)
+        left = split.row(align=True)
+        left.alignment = "LEFT"
+        op = left.operator(
+            SHLIGHT_OT_show_channels.bl_idname, text=f"{name} {SHORT_PHRASES[index]}",
+            icon="DISCLOSURE_TRI_DOWN" if shown[index] else "DISCLOSURE_TRI_RIGHT",
+            emboss=False)
+        op.index = index
+        right = split.row(align=True)
+        right.template_icon(icon_value=previews.swatch(index, coeffs[index]).icon_id)
+        right.prop(scene, f'["{scene_data.GAIN_NAMES[index]}"]', text="")
+        if shown[index]:
+            box = col.box().column(align=True)
+            path = f'["{scene_data.PROPERTY_NAMES[index]}"]'
+            for channel, letter in enumerate(CHANNELS):
+                box.prop(scene, path, index=channel, text=letter)
+
+
+class SHLIGHT_OT_show_channels(bpy.types.Operator):
+    """Show or hide the R, G, B values of this coefficient"""
+
+    bl_idname = "shlight.show_channels"
+    bl_label = "Show Channels"
+    bl_options = {"INTERNAL"}
+
+    index: bpy.props.IntProperty(min=0, max=8, options={"SKIP_SAVE", "HIDDEN"})
+
+    @classmethod
+    def description(cls, context, props):
+        """What the coefficient does now (``core.edits.describe_coefficients``) and the click."""
+        text = f"{COEFFICIENT_NAMES[props.index]}: {COEFFICIENT_PHRASES[props.index]}"
+        scene = context.scene
+        if scene is not None and scene_data.has_coefficients(scene):
+            try:
+                text = describe_coefficients(scene_data.get_coefficients(scene),
+                                             design.luminance())[props.index]
+            except ValueError:
+                pass
+        return f"{text}.\nClick to show or hide its R, G, B values"
+
+    def execute(self, context):
+        shown = getattr(context.window_manager, SHOW_CHANNELS)
+        shown[self.index] = not shown[self.index]
+        for area in context.screen.areas if context.screen else ():
+            area.tag_redraw()
+        return {"FINISHED"}
 
 
 class _SceneMixin:
@@ -70,12 +205,15 @@ LOCATIONS = {
 }
 
 
-def _panel(name, label, draw, parent=None, options=()):
+def _panel(name, label, draw, parent=None, options=(), header_preset=None):
     """One Panel class per location, ``SHLIGHT_PT_<location>[_<name>]``, drawing ``draw``."""
     panels = []
     for where, settings in LOCATIONS.items():
         attributes = {"bl_label": label, "bl_options": set(options), **settings,
                       "draw": lambda self, context: draw(self.layout, context)}
+        if header_preset is not None:
+            attributes["draw_header_preset"] = (
+                lambda self, context: header_preset(self.layout, context))
         if parent is not None:
             attributes["bl_parent_id"] = f"SHLIGHT_PT_{where}"
         suffix = f"_{name}" if name else ""
@@ -88,15 +226,29 @@ def sub_panels(name, label, draw, options=()):
     return _panel(name, label, draw, parent=True, options=options)
 
 
-SHLIGHT_PT_world, SHLIGHT_PT_view3d = _panel("", "SH Lighting", draw_main)
+SHLIGHT_PT_world, SHLIGHT_PT_view3d = _panel(
+    "", "SH Lighting", draw_main, header_preset=draw_presets_header)
 SHLIGHT_PT_world_coefficients, SHLIGHT_PT_view3d_coefficients = sub_panels(
     "coefficients", "Coefficients", draw_coefficients
 )
 
 classes = (
+    SHLIGHT_OT_show_channels,
     SHLIGHT_PT_world,
     SHLIGHT_PT_world_coefficients,
     SHLIGHT_PT_view3d,
     SHLIGHT_PT_view3d_coefficients,
 )
-register, unregister = bpy.utils.register_classes_factory(classes)
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    setattr(bpy.types.WindowManager, SHOW_CHANNELS, bpy.props.BoolVectorProperty(
+        name="Show Channels", description="Which coefficients show their R, G, B values",
+        size=9, options=set()))
+    _register_classes()
+
+
+def unregister():
+    _unregister_classes()
+    delattr(bpy.types.WindowManager, SHOW_CHANNELS)

@@ -7,25 +7,26 @@ our lighting lives in scene custom properties and our preset format is a strict,
 JSON file (``core.presets``) that other tools and the command line read too. So the menu
 follows Blender's conventions without executing anything:
 
-* ``SHLIGHT_MT_presets`` lists the shipped presets (the package's ``presets`` folder) and, under
-  them, the user's presets from Blender's user preset folder
+* ``SHLIGHT_PT_presets``, the popover in the header of the SH Lighting panel (Blender's place
+  for presets, with the PRESET icon), lists the shipped presets (the package's ``presets``
+  folder) and, under them, the user's presets from Blender's user preset folder
   (``<user scripts>/presets/sh_lighting``, beside Blender's own presets); each entry runs
-  ``shlight.load_preset`` with the file's path, and the menu's label is the name of the
-  preset the scene's values were loaded from (its recorded provenance, while that file
-  exists and no design edit followed), else "Presets". User entries have a "−" button
-  (``shlight.preset_remove``, with a confirmation); shipped presets have none and
-  ``preset_io.remove_user_preset`` refuses them anyway.
-* "+" (``shlight.preset_add``) saves the current coefficients as a user preset under a
-  sanitised file name (``preset_io.preset_file_name``), refusing to replace one unless
-  Overwrite is ticked.
-* Import and Export use the file browser: Import reads our JSON; Export writes our JSON or the
-  three.js, glTF or Filament forms (``preset_io.FORMATS``), atomically, and refuses to replace
-  an existing file unless Overwrite is ticked (the browser also flags existing files in red).
+  ``shlight.load_preset`` with the file's path. User entries have a "−" on their right
+  (``shlight.preset_remove``, whose confirmation names the preset); shipped presets have none
+  and ``preset_io.remove_user_preset`` refuses them anyway. Under the list, as in Blender's
+  preset popovers, a name field and "+" (``shlight.preset_add``) save the current
+  coefficients as a user preset under a sanitised file name (``preset_io.preset_file_name``),
+  refusing to replace one unless Overwrite is ticked; "+" without a name opens a dialog whose
+  name field is ready for typing.
+* Import and Export use the file browser: Import (opening in the .blend file's folder) reads our
+  JSON; Export has one entry per format (``preset_io.FORMATS``), each with its own label on the
+  file browser's button, and writes atomically, refusing to replace an existing file unless
+  Overwrite is ticked (the browser also flags existing files in red).
 
 Operators that change the scene (load, import) are undoable; those that only touch files
 (export, save, remove) are not. All work in background mode with ``'EXEC_DEFAULT'``; errors
-become an ERROR report and ``{'CANCELLED'}`` with nothing changed. The "Presets" sub-panel is
-drawn by ``draw_presets`` under both main panels (World Properties and the 3D Viewport
+become an ERROR report and ``{'CANCELLED'}`` with nothing changed. The popover is drawn by
+``draw_preset_menu`` in the header of both main panels (World Properties and the 3D Viewport
 sidebar).
 """
 
@@ -37,7 +38,7 @@ from bpy.props import BoolProperty, EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ..core.presets import PresetError
-from . import panels, preset_io, scene_data
+from . import preset_io, scene_data
 from .polls import coefficients_poll, scene_poll
 
 LOAD = "shlight.load_preset"
@@ -46,19 +47,23 @@ REMOVE = "shlight.preset_remove"
 IMPORT = "shlight.import_preset"
 EXPORT = "shlight.export_preset"
 
+FORMAT_DESCRIPTIONS = {
+    "sh_lighting": "SH Lighting preset: raw L_lm in Blender axes, with metadata (Import reads it)",
+    "threejs": "A LightProbe for three.js (ObjectLoader JSON): radiance L_lm, y-up glTF axes",
+    "gltf": "A .gltf environment for Babylon.js: irradiance coefficients and a specular cube "
+            "prefiltered from the world image, y-up glTF axes",
+    "filament": "cmgen-style sh.txt for Filament: shader-ready pre-scaled irradiance",
+}
+# The file browser's button of each format's Export operator.
+EXPORT_LABELS = {
+    "sh_lighting": "Export SH Preset",
+    "threejs": "Export three.js LightProbe",
+    "gltf": "Export glTF Environment",
+    "filament": "Export Filament SH",
+}
 FORMAT_ITEMS = tuple(
-    (key.upper(), label, description)
-    for key, label, description in (
-        ("sh_lighting", preset_io.FORMATS["sh_lighting"][0],
-         "SH Lighting preset: raw L_lm in Blender axes, with metadata (Import reads it)"),
-        ("threejs", preset_io.FORMATS["threejs"][0],
-         "A LightProbe for three.js (ObjectLoader JSON): radiance L_lm, y-up glTF axes"),
-        ("gltf", preset_io.FORMATS["gltf"][0],
-         "A .gltf environment for Babylon.js: irradiance coefficients and a specular cube "
-         "prefiltered from the world image, y-up glTF axes"),
-        ("filament", preset_io.FORMATS["filament"][0],
-         "cmgen-style sh.txt for Filament: shader-ready pre-scaled irradiance"),
-    )
+    (key.upper(), label, FORMAT_DESCRIPTIONS.get(key, label))
+    for key, (label, _ext) in preset_io.FORMATS.items()
 )
 KNOWN_EXTENSIONS = {ext for _label, ext in preset_io.FORMATS.values()}
 
@@ -126,6 +131,13 @@ class SHLIGHT_OT_import_preset(bpy.types.Operator, ImportHelper):
     def poll(cls, context):
         return scene_poll(cls, context)
 
+    def invoke(self, context, _event):
+        """Open the file browser in the .blend file's folder (when it is saved)."""
+        if not self.filepath and bpy.data.filepath:
+            self.filepath = os.path.join(os.path.dirname(bpy.data.filepath), "")
+        context.window_manager.fileselect_add(self)
+        return {"RUNNING_MODAL"}
+
     def execute(self, context):
         return load_preset_file(self, context.scene, self.filepath)
 
@@ -136,11 +148,10 @@ FILAMENT_FRAME_ITEMS = tuple(
 )
 
 
-class SHLIGHT_OT_export_preset(bpy.types.Operator, ExportHelper):
-    """Write the scene's SH lighting as a preset, or for three.js, glTF or Filament"""
+class _Export(ExportHelper):
+    """Export's settings and behaviour, shared by the general operator (with a Format choice)
+    and the one per format of the Export menu."""
 
-    bl_idname = EXPORT
-    bl_label = "Export SH Lighting"
     bl_options = {"REGISTER"}
 
     filename_ext = ".json"
@@ -202,6 +213,13 @@ class SHLIGHT_OT_export_preset(bpy.types.Operator, ExportHelper):
         return {"FINISHED"}
 
 
+class SHLIGHT_OT_export_preset(_Export, bpy.types.Operator):
+    """Write the scene's SH lighting as a preset, or for three.js, glTF or Filament"""
+
+    bl_idname = EXPORT
+    bl_label = "Export SH Lighting"
+
+
 class SHLIGHT_OT_preset_add(bpy.types.Operator):
     """Save the scene's SH coefficients as a user preset"""
 
@@ -226,7 +244,16 @@ class SHLIGHT_OT_preset_add(bpy.types.Operator):
         return _coefficients_poll(cls, context)
 
     def invoke(self, context, _event):
+        """Save at once under the name typed in the popover, else ask for one."""
+        if self.name.strip():
+            return self.execute(context)
         return context.window_manager.invoke_props_dialog(self)
+
+    def draw(self, _context):
+        layout = self.layout
+        layout.activate_init = True  # the name field is ready for typing
+        layout.prop(self, "name")
+        layout.prop(self, "overwrite")
 
     def execute(self, context):
         try:
@@ -253,7 +280,10 @@ class SHLIGHT_OT_preset_remove(bpy.types.Operator):
     )
 
     def invoke(self, context, event):
-        return context.window_manager.invoke_confirm(self, event)
+        return context.window_manager.invoke_confirm(
+            self, event, title="Remove SH Preset",
+            message=f"Delete the preset '{display_name(self.name, shipped=False)}'?",
+            confirm_text="Delete")
 
     def execute(self, _context):
         try:
@@ -265,63 +295,102 @@ class SHLIGHT_OT_preset_remove(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def _draw_one_format(self, _context):
+    """The file browser's side panel of a one-format Export: its options, no Format choice."""
+    layout = self.layout
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    if self.export_format == "FILAMENT":
+        layout.prop(self, "filament_frame")
+    layout.prop(self, "overwrite")
+
+
+def _export_operator(key):
+    """An Export operator for format ``key`` of ``preset_io.FORMATS``: the general one with
+    that format fixed, and a label of its own on the file browser's button."""
+    label, extension = preset_io.FORMATS[key]
+    return type(f"SHLIGHT_OT_export_{key}", (_Export, bpy.types.Operator), {
+        "__doc__": FORMAT_DESCRIPTIONS.get(key, label),
+        "bl_idname": f"shlight.export_{key}",
+        "bl_label": EXPORT_LABELS.get(key, f"Export {label}"),
+        "filename_ext": extension,
+        "__annotations__": {"export_format": EnumProperty(
+            name="Format", items=FORMAT_ITEMS, default=key.upper(), options={"HIDDEN"})},
+        "draw": _draw_one_format,
+    })
+
+
+EXPORTERS = tuple(_export_operator(key) for key in preset_io.FORMATS)
+
+
+class SHLIGHT_MT_export(bpy.types.Menu):
+    """Export the scene's SH coefficients"""
+
+    bl_label = "Export"
+
+    def draw(self, _context):
+        for key, cls in zip(preset_io.FORMATS, EXPORTERS, strict=True):
+            label, extension = preset_io.FORMATS[key]
+            self.layout.operator(cls.bl_idname, text=f"{label} ({extension})")
+
+
 def draw_preset_menu(layout):
-    """Shipped presets, then user presets with a remove button each, then Save."""
+    """Shipped presets, then user presets with "−" on their right; then a name field with
+    "+" (Blender's preset popovers), Import and Export."""
+    layout.emboss = "PULLDOWN_MENU"
     shipped = preset_io.shipped_presets()
     user = preset_io.user_presets()
-    if shipped:
-        layout.label(text="Shipped")
-        for name, path in shipped.items():
-            op = layout.operator(LOAD, text=display_name(name, shipped=True), translate=False)
-            op.filepath = str(path)
-        layout.separator()
-    layout.label(text="User")
+    col = layout.column(align=True)
+    for name, path in shipped.items():
+        op = col.operator(LOAD, text=display_name(name, shipped=True), translate=False)
+        op.filepath = str(path)
+    if user:
+        col.separator()
     for name, path in user.items():
-        row = layout.row(align=True)
+        row = col.row(align=True)
         op = row.operator(LOAD, text=display_name(name, shipped=False), translate=False)
         op.filepath = str(path)
         row.operator(REMOVE, text="", icon="REMOVE").name = name
-    if not user:
-        layout.label(text="None yet: save one with +")
     layout.separator()
-    layout.operator(ADD, text="Save Current as Preset...", icon="ADD")
+    row = layout.row()
+    sub = row.row()
+    sub.emboss = "NORMAL"
+    wm = bpy.context.window_manager
+    sub.prop(wm, PRESET_NAME, text="")
+    row.operator(ADD, text="", icon="ADD").name = getattr(wm, PRESET_NAME)
+    layout.separator()
+    layout.operator(IMPORT, text="Import…", icon="IMPORT")
+    layout.menu(SHLIGHT_MT_export.__name__, text="Export", icon="EXPORT")
+
+
+PRESET_NAME = "sh_lighting_preset_name"  # WindowManager: the name typed in the popover
+PRESETS_LABEL = "Presets"
 
 
 def menu_label(scene):
-    """The preset menu's label for ``scene``: the preset its values were loaded from, while
-    that file exists and no design edit or Compute followed, else "Presets"."""
+    """The name of the preset the scene's values were loaded from (its recorded provenance),
+    while that file exists and no design edit or Compute followed, else "Presets"."""
     record = scene_data.provenance(scene)
     path = record.get("path")
     if record.get("source") != "PRESET" or "edit" in record or not path:
-        return SHLIGHT_MT_presets.bl_label
+        return PRESETS_LABEL
     path = Path(path)
     if not path.is_file():
-        return SHLIGHT_MT_presets.bl_label
+        return PRESETS_LABEL
     shipped_dir = preset_io.shipped_preset_dir()
     shipped = shipped_dir is not None and path.parent == shipped_dir.resolve()
     return display_name(path.stem, shipped)
 
 
-class SHLIGHT_MT_presets(bpy.types.Menu):
-    bl_label = "Presets"
+class SHLIGHT_PT_presets(bpy.types.Panel):
+    """The presets popover of the SH Lighting panels' header (not a panel of its own)."""
+
+    bl_label = "SH Lighting Presets"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "HEADER"
 
     def draw(self, _context):
         draw_preset_menu(self.layout)
-
-
-def draw_presets(layout, context):
-    """The Presets sub-panel: the menu with Save, then Import and Export."""
-    row = layout.row(align=True)
-    row.menu(SHLIGHT_MT_presets.__name__, text=menu_label(context.scene))
-    row.operator(ADD, text="", icon="ADD")
-    row = layout.row(align=True)
-    row.operator(IMPORT, text="Import", icon="IMPORT")
-    row.operator(EXPORT, text="Export", icon="EXPORT")
-
-
-SHLIGHT_PT_world_presets, SHLIGHT_PT_view3d_presets = panels.sub_panels(
-    "presets", "Presets", draw_presets
-)
 
 
 classes = (
@@ -330,8 +399,20 @@ classes = (
     SHLIGHT_OT_export_preset,
     SHLIGHT_OT_preset_add,
     SHLIGHT_OT_preset_remove,
-    SHLIGHT_MT_presets,
-    SHLIGHT_PT_world_presets,
-    SHLIGHT_PT_view3d_presets,
+    *EXPORTERS,
+    SHLIGHT_MT_export,
+    SHLIGHT_PT_presets,
 )
-register, unregister = bpy.utils.register_classes_factory(classes)
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    setattr(bpy.types.WindowManager, PRESET_NAME, StringProperty(
+        name="Preset Name", description="Name of the preset that + saves",
+        maxlen=preset_io.MAX_NAME_LENGTH, options=set()))
+    _register_classes()
+
+
+def unregister():
+    _unregister_classes()
+    delattr(bpy.types.WindowManager, PRESET_NAME)

@@ -7,7 +7,10 @@ last drew and recomputes only when it differs, so drawing the panel costs nothin
 lighting stays the same and one small image (``bench_preview``: a few ms) after an edit.
 
 ``ImagePreview`` pixels run bottom row first and are stored as bytes (values quantised to
-1/255); core's images run top row first, so ``to_preview`` flips them. Headless, Blender gives
+1/255) with premultiplied alpha; core's images run top row first with straight alpha, so
+``to_preview`` flips them and multiplies colour by alpha (else the transparent corners around
+each sphere show as coloured squares). ``swatch`` gives the small square of one coefficient's
+colour drawn on its line in the Coefficients panel. Headless, Blender gives
 every preview ``icon_id`` 0 (there are no UI icons), but the pixels are kept.
 """
 
@@ -15,27 +18,31 @@ import bpy
 import bpy.utils.previews
 import numpy as np
 
-from ..core.preview import basis_sphere_images, irradiance_sphere_image
+from ..core.preview import basis_sphere_images, irradiance_sphere_image, linear_to_srgb
 
 BASIS_SIZE = 64
 IRRADIANCE_SIZE = 128
 BASIS_NAMES = tuple(f"basis_{k}" for k in range(9))
 IRRADIANCE_NAME = "irradiance"
+SWATCH_SIZE = 16
 
-# The collection and the signature of the irradiance image it holds; None when unregistered.
-_state = {"collection": None, "signature": None}
+# The collection and the signatures of the irradiance image and swatches it holds.
+_state = {"collection": None, "signature": None, "swatches": {}}
 
 
 def to_preview(preview, rgba):
     """Copy an RGBA float image (H, W, 4), rows top to bottom, into an ``ImagePreview``."""
     height, width = rgba.shape[:2]
     preview.image_size = (width, height)
-    flat = np.ascontiguousarray(rgba[::-1], dtype=np.float32).ravel()
+    premultiplied = np.array(rgba[::-1], dtype=np.float32)
+    premultiplied[..., :3] *= premultiplied[..., 3:]
+    flat = premultiplied.ravel()
     preview.image_pixels_float.foreach_set(flat)
 
 
 def from_preview(preview):
-    """The pixels of an ``ImagePreview`` as (H, W, 4) float32, rows top to bottom."""
+    """The pixels of an ``ImagePreview`` as (H, W, 4) float32, rows top to bottom
+    (premultiplied alpha, as stored)."""
     width, height = preview.image_size
     flat = np.empty(width * height * 4, dtype=np.float32)
     preview.image_pixels_float.foreach_get(flat)
@@ -80,6 +87,33 @@ def irradiance(coeffs, exposure=0.0):
     return preview
 
 
+def swatch_colour(rgb):
+    """The display colour of an RGB coefficient: the triple over its channel of largest
+    magnitude (so that channel is 1 and a negative light shows its colour too), clipped to
+    [0, 1], sRGB-encoded; mid grey for an all-zero triple."""
+    rgb = np.asarray(rgb, dtype=np.float64)
+    largest = rgb[np.argmax(np.abs(rgb))]
+    if largest == 0.0 or not np.isfinite(rgb).all():
+        return np.full(3, 0.5)
+    return linear_to_srgb(np.clip(rgb / largest, 0.0, 1.0))
+
+
+def swatch(index, rgb):
+    """The ``ImagePreview`` of coefficient ``index``'s colour (``swatch_colour``), redrawn
+    only when that colour changes by a display step."""
+    pcoll = collection()
+    name = f"swatch_{index}"
+    preview = pcoll.get(name) or pcoll.new(name)
+    colour = swatch_colour(rgb)
+    key = tuple(np.round(colour * 255.0).astype(int))
+    if _state["swatches"].get(index) != key:
+        image = np.ones((SWATCH_SIZE, SWATCH_SIZE, 4))
+        image[..., :3] = colour
+        to_preview(preview, image)
+        _state["swatches"][index] = key
+    return preview
+
+
 def register():
     if _state["collection"] is not None:  # registered twice without unregister: start clean
         unregister()
@@ -88,11 +122,13 @@ def register():
         to_preview(pcoll.new(name), image)
     _state["collection"] = pcoll
     _state["signature"] = None
+    _state["swatches"] = {}
 
 
 def unregister():
     pcoll = _state["collection"]
     _state["collection"] = None
     _state["signature"] = None
+    _state["swatches"] = {}
     if pcoll is not None:
         bpy.utils.previews.remove(pcoll)

@@ -7,7 +7,6 @@ split can be predicted texel by texel.
 """
 
 import math
-import textwrap
 from types import SimpleNamespace
 
 import bpy
@@ -15,13 +14,14 @@ import numpy as np
 import pytest
 from blender_files import SCRIPT, WORLD, write_exr
 from blender_scenes import (
-    EULER, STRENGTH, SUN_IMAGE_DIRECTION, SUN_RADIANCE, SUN_RGB, H, W, RecordingLayout,
-    add_mapping, environment_world, run_execute, sky_map, sunny_map,
+    EULER, STRENGTH, SUN_IMAGE_DIRECTION, SUN_RADIANCE, SUN_RGB, H, W, add_mapping,
+    environment_world, run_execute, sky_map, sunny_map,
 )
 from numpy.testing import assert_allclose, assert_array_equal
 
 import sh_lighting
-from sh_lighting.blender import compat, compute, design, design_ui, lights_ui, previews, scene_data
+from sh_lighting.blender import (compat, compute, design, design_ui, lights_ui, panels,
+                                 previews, scene_data)
 from sh_lighting.blender.images import image_pixels
 from sh_lighting.blender.world import world_coefficients
 from sh_lighting.core import edits, windowing
@@ -33,6 +33,7 @@ from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.rotation import euler_xyz_matrix, rotate_coefficients
 from sh_lighting.core.sh import sh_basis
 from sh_lighting.core.sh import spread_normals
+from ui_layout import RecordingLayout
 
 pytestmark = pytest.mark.blender
 
@@ -192,7 +193,7 @@ def test_match_mapping_equals_computing_with_the_mapping(addon, tmp_path):
     assert np.abs(with_mapping - plain).max() > 0.1 * np.abs(plain).max()  # it does rotate
 
     bpy.ops.ed.undo_push(message="before match")
-    assert bpy.ops.shlight.rotate("EXEC_DEFAULT", True, mode="MAPPING") == {"FINISHED"}
+    assert bpy.ops.shlight.match_mapping("EXEC_DEFAULT", True) == {"FINISHED"}
     assert_allclose(stored(), with_mapping, rtol=0, atol=1e-12 * np.abs(plain).max())
     bpy.ops.ed.undo()
     assert_array_equal(stored(), plain)
@@ -204,13 +205,15 @@ def test_match_mapping_without_a_mapping_node_changes_nothing(addon, tmp_path):
     scene = bpy.context.scene
     environment_world(scene, write_exr(tmp_path / "w.exr", sky_map()))
     scene_data.store(scene, KNOWN, SCRIPT)
-    with pytest.raises(RuntimeError, match="no Mapping node"):
-        bpy.ops.shlight.rotate(mode="MAPPING")
+    # greyed out with the reason (poll), and the function refuses too
+    assert "no rotation to match" in design_ui.mapping_problem(bpy.context)
+    with pytest.raises(RuntimeError, match="no rotation to match"):
+        bpy.ops.shlight.match_mapping()
     with pytest.raises(design.DesignError, match="no Mapping node"):
         design.match_mapping(scene)
     scene.world = None
     with pytest.raises(RuntimeError, match="has no world"):
-        bpy.ops.shlight.rotate(mode="MAPPING")
+        bpy.ops.shlight.match_mapping()
     assert_array_equal(stored(), KNOWN)
 
 
@@ -245,16 +248,15 @@ def test_minimal_window_makes_a_single_sun_world_non_negative_and_reports_costs(
         return f"{100 * mean.max():.2f} / {100 * largest.max():.2f}"
 
     c = costs["MINIMAL"]
+    w = minimal.window
     expected = (
-        f"mean / max % of its light: none {percent(c.plain_mean, c.plain_max)}, "
-        f"Hanning {percent(costs['HANNING'].windowed_mean, costs['HANNING'].windowed_max)}, "
-        f"Lanczos {percent(costs['LANCZOS'].windowed_mean, costs['LANCZOS'].windowed_max)}, "
-        f"Minimal (applied) {percent(c.windowed_mean, c.windowed_max)}"
+        f"Minimal window applied: directional ×{w[1]:.2f}, quadratic ×{w[2]:.2f}; error vs the "
+        f"world image {100 * c.windowed_mean.max():.1f} % of its light (without: "
+        f"{100 * c.plain_mean.max():.1f} %)"
     )
     [(kind, message)] = reports
     assert kind == {"INFO"}
-    assert message.startswith("Minimal window (1, ")
-    assert message.endswith(expected), message
+    assert message == expected
     # the plain 9 terms of one small source: mean error near 3 % of its power (REFERENCE.md §2)
     assert 0.02 < c.plain_mean.max() < 0.035
 
@@ -495,7 +497,8 @@ def test_previews_hold_cores_images_and_follow_edits(addon, monkeypatch):
     expected = basis_sphere_images(previews.BASIS_SIZE)
     for preview, image in zip(basis, expected, strict=True):
         assert tuple(preview.image_size) == (previews.BASIS_SIZE, previews.BASIS_SIZE)
-        assert_allclose(previews.from_preview(preview), image, rtol=0, atol=BYTE)
+        assert_allclose(previews.from_preview(preview), premultiplied(image), rtol=0, atol=BYTE)
+        assert (previews.from_preview(preview)[0, 0] == 0).all()  # no coloured square
 
     scene_data.store(scene, KNOWN, SCRIPT)
     scene.view_settings.exposure = -1.0
@@ -503,19 +506,20 @@ def test_previews_hold_cores_images_and_follow_edits(addon, monkeypatch):
     original = previews.irradiance_sphere_image
     monkeypatch.setattr(previews, "irradiance_sphere_image",
                         lambda *a, **k: calls.append(a) or original(*a, **k))
-    design_ui.draw_design(RecordingLayout([]), bpy.context)
+    panels.draw_main(RecordingLayout(), bpy.context)
     preview = previews.collection()[previews.IRRADIANCE_NAME]
     assert tuple(preview.image_size) == (previews.IRRADIANCE_SIZE, previews.IRRADIANCE_SIZE)
     image = irradiance_sphere_image(KNOWN, previews.IRRADIANCE_SIZE, -1.0, show_negative=True)
-    assert_allclose(previews.from_preview(preview), image, rtol=0, atol=BYTE)
-    design_ui.draw_design(RecordingLayout([]), bpy.context)
+    assert_allclose(previews.from_preview(preview), premultiplied(image), rtol=0, atol=BYTE)
+    panels.draw_main(RecordingLayout(), bpy.context)
     assert len(calls) == 1  # same coefficients: not recomputed
 
     bpy.ops.shlight.exposure(stops=2.0)
-    design_ui.draw_design(RecordingLayout([]), bpy.context)
+    panels.draw_main(RecordingLayout(), bpy.context)
     assert len(calls) == 2
     image = irradiance_sphere_image(stored(), previews.IRRADIANCE_SIZE, -1.0, show_negative=True)
-    assert_allclose(previews.from_preview(preview), image, rtol=0, atol=BYTE)
+    assert_allclose(previews.from_preview(preview), premultiplied(image), rtol=0, atol=BYTE)
+    assert (previews.from_preview(preview)[0, 0] == 0).all()  # transparent corners: no square
 
 
 def test_previews_collection_is_removed_on_unregister_without_leaks():
@@ -531,66 +535,72 @@ def test_previews_collection_is_removed_on_unregister_without_leaks():
     assert set(bpy.utils.previews._uuid_open) == open_before
 
 
-# -- the Design sub-panel ----------------------------------------------------------------------
+# -- the panels --------------------------------------------------------------------------------
 
 
-def draw(context):
-    calls = []
-    design_ui.draw_design(RecordingLayout(calls), context)
-    return calls
+def premultiplied(rgba):
+    """What an ImagePreview holds of core's straight-alpha image."""
+    out = np.array(rgba, dtype=np.float64)
+    out[..., :3] *= out[..., 3:]
+    return out
 
 
-def test_design_panels_are_under_both_main_panels(addon):
-    assert bpy.types.SHLIGHT_PT_world_design.bl_parent_id == "SHLIGHT_PT_world"
-    assert bpy.types.SHLIGHT_PT_view3d_design.bl_parent_id == "SHLIGHT_PT_view3d"
-    expected = [call[:2] for call in draw(bpy.context)]
-    for cls in (design_ui.SHLIGHT_PT_world_design, design_ui.SHLIGHT_PT_view3d_design):
-        calls = []
-        cls.draw(SimpleNamespace(layout=RecordingLayout(calls)), bpy.context)
-        assert cls.bl_label == "Design"
-        assert [call[:2] for call in calls] == expected  # both draw draw_design
+def test_design_and_basis_panels_are_under_both_main_panels(addon):
+    for name, label in (("design", "Design"), ("basis", "Basis Functions")):
+        for where in ("world", "view3d"):
+            cls = getattr(bpy.types, f"SHLIGHT_PT_{where}_{name}")
+            assert cls.bl_parent_id == f"SHLIGHT_PT_{where}"
+            assert cls.bl_label == label
+            assert "DEFAULT_CLOSED" in cls.bl_options  # the chart is folded until asked for
 
 
-def test_design_panel_draws_previews_warning_words_and_buttons(addon, monkeypatch):
-    scene = bpy.context.scene
-    # Headless every real preview has icon_id 0: stand-ins with distinct ids show which is drawn.
+def test_basis_panel_draws_the_nine_functions_in_order(addon, monkeypatch):
     basis = tuple(SimpleNamespace(icon_id=101 + k) for k in range(9))
+    monkeypatch.setattr(previews, "basis", lambda: basis)
+    layout = RecordingLayout()
+    design_ui.draw_basis(layout, bpy.context)
+    icons = layout.of("icon")
+    assert [c[1] for c in icons] == list(range(101, 110))  # in order l(l+1) + m
+    assert len({c[2] for c in icons}) == 1  # one size for every row (l = 2 is not smaller)
+
+
+def test_main_panel_shows_the_sphere_and_one_warning_line(addon, monkeypatch):
+    scene = bpy.context.scene
     sphere = SimpleNamespace(icon_id=200)
     drawn = []
-    monkeypatch.setattr(previews, "basis", lambda: basis)
     monkeypatch.setattr(previews, "irradiance",
                         lambda coeffs, exposure=0.0: drawn.append((coeffs, exposure)) or sphere)
-    calls = draw(bpy.context)
-    icons = [c for c in calls if c[0] == "icon"]
-    assert len(icons) == 9  # the basis only
-    assert (design_ui.NO_COEFFICIENTS, "INFO") in [c[1:] for c in calls if c[0] == "label"]
+    layout = RecordingLayout()
+    panels.draw_main(layout, bpy.context)
+    assert not layout.of("icon") and not drawn  # no coefficients: no sphere
 
     scene_data.store(scene, KNOWN, SCRIPT)  # E < 0 behind its main light
-    calls = draw(bpy.context)
-    icons = [c for c in calls if c[0] == "icon"]
-    assert [c[1] for c in icons[:9]] == list(range(101, 110))  # in order l(l+1) + m
-    assert icons[9][1] == 200
-    assert len(icons) == 10
-    assert len(drawn) == 1
+    layout = RecordingLayout()
+    panels.draw_main(layout, bpy.context)
+    assert [c[1] for c in layout.of("icon")] == [200]
+    assert layout.calls[0][0] == "icon"  # the sphere comes first
     assert_array_equal(drawn[0][0], stored())
     assert drawn[0][1] == scene.view_settings.exposure
-    labels = [c for c in calls if c[0] == "label"]
-    errors = [i for i, c in enumerate(labels) if c[2] == "ERROR"]
-    assert len(errors) == 1
-    warning = negative_light_warning(KNOWN)
-    wrapped = textwrap.wrap(warning, design_ui.WARNING_WIDTH)
-    assert [c[1] for c in labels[errors[0]: errors[0] + len(wrapped)]] == wrapped
-    words = [c[1] for c in labels]
-    for line in edits.describe_coefficients(KNOWN):
-        assert line in words
+    warning = [c for c in layout.of("operator") if c[1] == "shlight.window"]
+    assert len(warning) == 1 and warning[0][2].kind == "MINIMAL" and warning[0][3]["alert"]
+    tooltip = design_ui.SHLIGHT_OT_window.description(bpy.context, SimpleNamespace(kind="MINIMAL"))
+    assert tooltip.startswith(negative_light_warning(KNOWN))
 
-    ops = [(c[1], dict(vars(c[2]))) for c in calls if c[0] == "operator"]
+    scene_data.store(scene, windowing.minimal_nonnegative_window(KNOWN).coefficients, SCRIPT)
+    layout = RecordingLayout()
+    panels.draw_main(layout, bpy.context)
+    assert "shlight.window" not in layout.operators()
+    assert "White sphere, front view" in layout.text()  # the same one line, no warning
+
+
+def test_design_panel_draws_every_design_operator(addon):
+    scene_data.store(bpy.context.scene, KNOWN, SCRIPT)
+    layout = RecordingLayout()
+    design_ui.draw_design(layout, bpy.context)
+    ops = [(c[1], dict(vars(c[2]))) for c in layout.of("operator")]
     idnames = {name for name, _ in ops}
-    assert idnames == {f"shlight.{cls.bl_idname.split('.')[1]}"
-                       for cls in (*design_ui.classes, *lights_ui.classes)
+    assert idnames == {cls.bl_idname for cls in (*design_ui.classes, *lights_ui.classes)
                        if hasattr(cls, "bl_idname") and cls.bl_idname.startswith("shlight.")}
-    assert ("shlight.rotate", {"mode": "MAPPING"}) in ops
-    assert ("shlight.exposure", {"stops": -1.0}) in ops
     assert {p.get("kind") for name, p in ops if name == "shlight.window"} == set(design.WINDOWS)
     for name, props in ops:  # every button's operator and settings exist
         op = getattr(bpy.ops.shlight, name.split(".")[1])
@@ -598,6 +608,10 @@ def test_design_panel_draws_previews_warning_words_and_buttons(addon, monkeypatc
         for key in props:
             assert key in rna
 
-    scene_data.store(scene, windowing.minimal_nonnegative_window(KNOWN).coefficients, SCRIPT)
-    labels = [c for c in draw(bpy.context) if c[0] == "label"]
-    assert not [c for c in labels if c[2] == "ERROR"]
+
+def test_rotate_and_exposure_are_live_popups_with_redo(addon):
+    for op in ("rotate", "exposure", "saturation", "band_gains"):
+        cls = getattr(design_ui, f"SHLIGHT_OT_{op}")
+        assert issubclass(cls, design_ui._Live)
+        assert {"REGISTER", "UNDO"} <= cls.bl_options  # redo panel and F9
+    assert bpy.ops.shlight.exposure.get_rna_type().properties["stops"].default == 0.0

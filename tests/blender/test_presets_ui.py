@@ -19,10 +19,11 @@ import pytest
 from blender_files import SCRIPT, WORLD, write_constant_exr
 from numpy.testing import assert_allclose, assert_array_equal
 
-from sh_lighting.blender import compat, preset_io, presets_ui, scene_data
+from sh_lighting.blender import compat, panels, preset_io, presets_ui, scene_data
 from sh_lighting.core import atomic, interop
 from sh_lighting.core.presets import PresetError, read_preset, write_preset
 from tools import package
+from ui_layout import RecordingLayout
 
 pytestmark = pytest.mark.blender
 
@@ -397,37 +398,14 @@ def test_a_user_folder_that_cannot_be_created_is_a_clear_error(scene, user_dir):
 # --- the menu and panels -------------------------------------------------------------------
 
 
-class FakeLayout:
-    """Records what a draw function asks for: (kind, text, properties set on the operator)."""
-
-    def __init__(self, log=None):
-        self.log = [] if log is None else log
-
-    def operator(self, idname, text="", icon="NONE", translate=True):
-        props = SimpleNamespace()
-        self.log.append(("operator", idname, text, props))
-        return props
-
-    def row(self, align=False):
-        return FakeLayout(self.log)
-
-    def menu(self, idname, text=""):
-        self.log.append(("menu", idname, text, None))
-
-    def label(self, text="", icon="NONE"):
-        self.log.append(("label", None, text, None))
-
-    def separator(self):
-        pass
-
-
 def test_menu_lists_shipped_then_user_presets_with_remove_buttons(scene, user_dir):
     preset_io.save_user_preset(scene, "Late Sun")
-    layout = FakeLayout()
+    layout = RecordingLayout()
     presets_ui.draw_preset_menu(layout)
-    loads = [(text, props.filepath) for kind, op, text, props in layout.log
+    operators = layout.of("operator")
+    loads = [(kw["text"], props.filepath) for _k, op, props, kw in operators
              if op == presets_ui.LOAD]
-    removes = [props.name for kind, op, text, props in layout.log if op == presets_ui.REMOVE]
+    removes = [props.name for _k, op, props, _kw in operators if op == presets_ui.REMOVE]
     shipped = preset_io.shipped_presets()
     assert [text for text, _path in loads[: len(shipped)]] == [
         "City", "Courtyard", "Eucalyptus Grove", "Forest", "Grace Cathedral", "Interior",
@@ -436,11 +414,46 @@ def test_menu_lists_shipped_then_user_presets_with_remove_buttons(scene, user_di
     assert [path for _text, path in loads[: len(shipped)]] == [str(p) for p in shipped.values()]
     assert loads[len(shipped):] == [("Late Sun", str(user_dir / "Late_Sun.json"))]
     assert removes == ["Late_Sun"]  # never one for a shipped preset
-    assert any(op == presets_ui.ADD for _kind, op, _text, _props in layout.log)
-    for kind, idname, _text, props in layout.log:  # what the menu sets exists on the operator
-        if kind == "operator":
-            rna = getattr(bpy.ops.shlight, idname.split(".")[1]).get_rna_type()
-            assert set(vars(props)) <= set(rna.properties.keys()), idname
+    # Blender's preset popovers: each user preset's "−" right after it, then a name field + "+".
+    order = [op for _k, op, _p, _kw in operators]
+    assert order[order.index(presets_ui.REMOVE) - 1] == presets_ui.LOAD
+    name_field = [c for c in layout.of("prop") if c[2] == presets_ui.PRESET_NAME]
+    assert len(name_field) == 1 and order[len(loads) + 1] == presets_ui.ADD
+    assert order[-1] == presets_ui.IMPORT
+    assert [c[1] for c in layout.of("menu")] == ["SHLIGHT_MT_export"]
+    for _kind, idname, props, _kw in operators:  # what the menu sets exists on the operator
+        rna = getattr(bpy.ops.shlight, idname.split(".")[1]).get_rna_type()
+        assert set(vars(props)) <= set(rna.properties.keys()), idname
+
+
+def test_presets_sit_in_the_header_of_both_main_panels(addon):
+    layout = RecordingLayout()
+    panels.draw_presets_header(layout, bpy.context)
+    assert [c[1] for c in layout.of("popover")] == ["SHLIGHT_PT_presets"]
+    assert layout.of("popover")[0][2]["icon"] == "PRESET"
+    assert presets_ui.SHLIGHT_PT_presets.bl_region_type == "HEADER"
+    for cls in (panels.SHLIGHT_PT_world, panels.SHLIGHT_PT_view3d):
+        assert hasattr(cls, "draw_header_preset")
+
+
+def test_each_export_format_has_its_own_labelled_operator(scene, tmp_path):
+    labels = {}
+    for key, (label, extension) in preset_io.FORMATS.items():
+        cls = getattr(bpy.types, f"SHLIGHT_OT_export_{key}")
+        labels[key] = cls.bl_label
+        path, general = (tmp_path / f"{key}_{side}" / f"light{extension}" for side in "ab")
+        path.parent.mkdir()
+        general.parent.mkdir()
+        assert getattr(bpy.ops.shlight, f"export_{key}")(filepath=str(path)) == {"FINISHED"}
+        assert bpy.ops.shlight.export_preset(filepath=str(general),
+                                             export_format=key.upper()) == {"FINISHED"}
+        assert path.read_text() == general.read_text()  # the same format as the general one
+    assert labels == {"sh_lighting": "Export SH Preset", "threejs": "Export three.js LightProbe",
+                      "gltf": "Export glTF Environment", "filament": "Export Filament SH"}
+    layout = RecordingLayout()
+    presets_ui.SHLIGHT_MT_export.draw(SimpleNamespace(layout=layout), bpy.context)
+    assert [kw["text"] for _k, _op, _p, kw in layout.of("operator")] == [
+        f"{label} ({ext})" for label, ext in preset_io.FORMATS.values()]
 
 
 def test_operators_that_change_the_scene_are_undoable_and_file_ones_are_not(addon):
@@ -452,16 +465,6 @@ def test_operators_that_change_the_scene_are_undoable_and_file_ones_are_not(addo
         assert cls.is_registered, cls.__name__
         if issubclass(cls, bpy.types.Operator):
             assert cls.__doc__, cls.__name__  # the operator's tooltip
-
-
-def test_presets_sub_panels_sit_under_both_main_panels(addon):
-    layout = FakeLayout()
-    presets_ui.draw_presets(layout, bpy.context)
-    drawn = [op for _kind, op, _text, _props in layout.log]
-    assert drawn == ["SHLIGHT_MT_presets", presets_ui.ADD, presets_ui.IMPORT, presets_ui.EXPORT]
-    assert bpy.types.SHLIGHT_PT_world_presets.bl_parent_id == "SHLIGHT_PT_world"
-    assert bpy.types.SHLIGHT_PT_view3d_presets.bl_parent_id == "SHLIGHT_PT_view3d"
-    assert bpy.types.SHLIGHT_PT_view3d_presets.bl_category == "SH Lighting"
 
 
 @pytest.mark.parametrize(

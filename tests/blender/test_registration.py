@@ -3,14 +3,17 @@
 and everything gone again after unregister.
 """
 
+from types import SimpleNamespace
+
 import bpy
+import numpy as np
 import pytest
 from blender_files import SCRIPT
-from blender_scenes import RecordingLayout
 
 from sh_lighting import blender
-from sh_lighting.blender import operators, panels, scene_data
+from sh_lighting.blender import design, operators, panels, scene_data
 from sh_lighting.core.sh import COEFFICIENT_NAMES
+from ui_layout import RecordingLayout
 
 CYCLES = 20
 
@@ -98,35 +101,55 @@ def test_coefficient_custom_properties_get_ui_data(addon):
 def test_panels_draw_resolvable_properties_and_operators(addon):
     scene = bpy.context.scene
     context = bpy.context
-    calls = []
-    panels.draw_main(RecordingLayout(calls), context)
-    ops = [c[1] for c in calls if c[0] == "operator"]
+    layout = RecordingLayout()
+    panels.draw_main(layout, context)
+    ops = layout.operators()
     assert ops == ["shlight.compute_from_world", "shlight.reset", "shlight.apply", "shlight.remove"]
     for idname in ops:
         module, name = idname.split(".")
         assert hasattr(getattr(bpy.ops, module), name)
 
-    calls.clear()
-    panels.draw_coefficients(RecordingLayout(calls), context)
-    assert not [c for c in calls if c[0] == "prop"]  # no coefficients yet: a hint only
-    assert any("Compute" in c[1] for c in calls if c[0] == "label")
+    layout = RecordingLayout()
+    panels.draw_coefficients(layout, context)
+    assert not layout.of("prop")  # no coefficients yet: a hint only
+    assert "press Compute from World" in layout.text()
 
     scene_data.store(scene, [[float(i), 1.0, 2.0] for i in range(9)], SCRIPT)
-    calls.clear()
-    panels.draw_coefficients(RecordingLayout(calls), context)
-    labels = [c[1] for c in calls if c[0] == "label"]
-    assert labels[2] == "L10: light from above vs below"
-    assert labels[3] == "L11: light from +X vs −X"
-    props = [c for c in calls if c[0] == "prop"]
-    assert len(props) == 9 * 4  # gain + R, G, B
-    for _, data, path, kwargs in props:
-        value = data.path_resolve(path)  # the drawn path exists
-        if "index" in kwargs:
-            assert 0 <= kwargs["index"] < len(value)
-    rgb = [(path, kwargs["index"]) for _, data, path, kwargs in props if "index" in kwargs]
-    assert rgb[6:9] == [('["sh_L10"]', 0), ('["sh_L10"]', 1), ('["sh_L10"]', 2)]
-    gains = [path for _, data, path, kwargs in props if "index" not in kwargs]
-    assert gains == [f'["{name}"]' for name in scene_data.GAIN_NAMES]
+    layout = RecordingLayout()
+    panels.draw_coefficients(layout, context)
+    names = [c[3]["text"] for c in layout.of("operator")]
+    assert names[2] == "L10 up/down" and names[3] == "L11 ±X"  # one line per coefficient
+    assert [c[2].index for c in layout.of("operator")] == list(range(9))
+    assert len(layout.of("icon")) == 9  # a swatch each
+    props = layout.of("prop")
+    assert [path for _, data, path, _kwargs in props] == [
+        f'["{name}"]' for name in scene_data.GAIN_NAMES]  # the strength only: channels on demand
+    for _, data, path, _kwargs in props:
+        data.path_resolve(path)  # the drawn path exists
+
+    bpy.context.window_manager.sh_lighting_show_channels[2] = True  # L10 opened
+    layout = RecordingLayout()
+    panels.draw_coefficients(layout, context)
+    rgb = [(path, kwargs["index"]) for _, data, path, kwargs in layout.of("prop")
+           if "index" in kwargs]
+    assert rgb == [('["sh_L10"]', 0), ('["sh_L10"]', 1), ('["sh_L10"]', 2)]
+    assert layout.of("operator")[2][3]["icon"] == "DISCLOSURE_TRI_DOWN"
+
+
+def test_coefficient_line_tooltip_says_what_it_does_now(addon):
+    from sh_lighting.core.edits import describe_coefficients
+
+    scene = bpy.context.scene
+    op = panels.SHLIGHT_OT_show_channels
+    assert op.description(bpy.context, SimpleNamespace(index=2)).startswith(
+        "L10: light from above vs below")
+    coeffs = np.array([[float(i), 1.0, 2.0] for i in range(9)])
+    scene_data.store(scene, coeffs, SCRIPT)
+    text = op.description(bpy.context, SimpleNamespace(index=2))
+    assert text.startswith(describe_coefficients(coeffs, design.luminance())[2])
+    assert bpy.ops.shlight.show_channels(index=4) == {"FINISHED"}
+    assert list(bpy.context.window_manager.sh_lighting_show_channels) == [False] * 4 + [True] + [
+        False] * 4
 
 
 def test_panels_live_in_world_properties_and_sidebar(addon):

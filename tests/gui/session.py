@@ -1,0 +1,792 @@
+"""An artist's session with SH Lighting in a real Blender window (run by ``blender --python``).
+
+Not a pytest module: ``tests/gui/test_gui.py`` installs the extension into a Blender with a
+window (``blender-gui-root run`` on this machine, or the user's Blender) and runs this file in
+it. Every step runs from a ``bpy.app.timers`` callback (the window exists only then) and acts
+through the window system: mouse clicks, drags and key presses sent with ``xdotool`` to the
+virtual screen, pictures taken with ImageMagick's ``import``. Python sets up only what an
+artist would set up by hand before the session (the world image, a Suzanne, the view) and
+reads what is stored to predict what the screen must show.
+
+The check after each step: the colour of every sampled pixel of the cube and of Suzanne on the
+screen against the prediction from the *stored* coefficients, eq. 13 of the paper evaluated
+here independently of the add-on, E(n) = c1 L22 (x²-y²) + c3 L20 z² + c4 L00 - c5 L20 +
+2 c1 (L2-2 xy + L21 xz + L2-1 yz) + 2 c2 (L11 x + L1-1 y + L10 z), at the normal n that a ray
+cast through that pixel hits (flat-shaded faces: the face normal is the shading normal),
+shown as albedo · max(E, 0) / π through the Standard view transform (sRGB, 8 bits). Pixels
+within 2 px of a face edge are left out (anti-aliasing). The viewport is polled until it
+matches or ``MATCH_TIMEOUT`` passes, so a stale viewport fails the check instead of passing
+after a lucky wait.
+
+Results go to ``$SHOTS/results.json`` (one entry per check, with what was measured), pictures
+to ``$SHOTS/*.png``.
+"""
+
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+import traceback
+
+import bpy
+import numpy as np
+from bpy_extras import view3d_utils
+from mathutils import Euler, Vector
+
+SHOTS = os.environ["SHOTS"]
+ADDON = "bl_ext.user_default.sh_lighting"
+NAMES = ("sh_L00", "sh_L1m1", "sh_L10", "sh_L11", "sh_L2m2", "sh_L2m1", "sh_L20", "sh_L21",
+         "sh_L22")
+C1, C2, C3, C4, C5 = 0.429043, 0.511664, 0.743125, 0.886227, 0.247708  # paper, eq. 13
+
+# A pixel matches when it is within PIXEL_TOLERANCE 8-bit steps of the prediction: 0.5 for
+# the 8-bit rounding of the screen, 0.5 for float rounding in the GPU's sRGB encode, and the
+# rest for the terms the node group may leave out (at most 0.1 % of the mean irradiance by
+# default, about 0.2 steps here). A check passes when MATCH_FRACTION of the pixels match and
+# the mean colour of each object is within MEAN_TOLERANCE steps of its predicted mean.
+PIXEL_TOLERANCE = 2.0
+MATCH_FRACTION = 0.99
+MEAN_TOLERANCE = 1.0
+MATCH_TIMEOUT = float(os.environ.get("SH_GUI_MATCH_TIMEOUT", "40"))
+GRID = 3  # sample every GRID pixels
+
+results = {"checks": [], "blender": bpy.app.version_string, "python": sys.version.split()[0],
+           "numpy": np.__version__, "screens": []}
+state = {}
+
+
+# -- the window system ----------------------------------------------------------------------
+
+
+def xdo(*args):
+    subprocess.run(["xdotool", *[str(a) for a in args]], check=True)
+
+
+def screen_size():
+    win = bpy.context.window_manager.windows[0]
+    return win.width, win.height
+
+
+def grab():
+    """The whole screen as (H, W, 3) uint8, rows top to bottom."""
+    width, height = screen_size()
+    raw = subprocess.run(["import", "-window", "root", "-depth", "8", "rgb:-"],
+                         capture_output=True, check=True).stdout
+    return np.frombuffer(raw, dtype=np.uint8)[: width * height * 3].reshape(height, width, 3)
+
+
+def shot(name, crop=None):
+    """Save the screen (or ``crop`` = (x, y, w, h), top-left origin) as ``$SHOTS/name.png``."""
+    path = os.path.join(SHOTS, name + ".png")
+    command = ["import", "-window", "root"]
+    if crop is not None:
+        x, y, w, h = (int(v) for v in crop)
+        command += ["-crop", f"{w}x{h}+{x}+{y}", "+repage"]
+    subprocess.run(command + [path], check=True)
+    results["screens"].append(name)
+    return path
+
+
+def window():
+    return bpy.context.window_manager.windows[0]
+
+
+def area(kind):
+    for a in window().screen.areas:
+        if a.type == kind:
+            return a
+    raise LookupError(kind)
+
+
+def region(a, kind):
+    return next(r for r in a.regions if r.type == kind)
+
+
+def to_screen(reg, x, y):
+    """Region coordinates (origin bottom-left) to screen pixels (origin top-left)."""
+    _w, height = screen_size()
+    return int(round(reg.x + x)), int(round(height - 1 - (reg.y + y)))
+
+
+def region_rect(reg):
+    """(x, y, w, h) of a region on the screen, top-left origin."""
+    _w, height = screen_size()
+    return reg.x, height - (reg.y + reg.height), reg.width, reg.height
+
+
+def sidebar_point(dx, dy):
+    """A point of the 3D viewport's sidebar, ``dy`` px below its top and ``dx`` px right of
+    its left edge (what the calibration pictures give)."""
+    x, y, _w, _h = region_rect(region(area("VIEW_3D"), "UI"))
+    return x + dx, y + dy
+
+
+def click(point, button=1):
+    """A generator step: move there, let Blender see the mouse over the button, click."""
+    xdo("mousemove", *point)
+    yield 0.4
+    xdo("click", button)
+    yield 0.2
+
+
+def mouse():
+    """Where the mouse pointer is on the screen."""
+    out = subprocess.run(["xdotool", "getmouselocation", "--shell"], capture_output=True,
+                         text=True).stdout
+    pos = dict(line.split("=") for line in out.split() if "=" in line)
+    return int(pos.get("X", 960)), int(pos.get("Y", 600))
+
+
+def settle(seconds=2.5):
+    """A generator step: let every area redraw its new content (panel layouts take a redraw
+    or two to find their places; a mouse move over each region triggers one)."""
+    for a in window().screen.areas:
+        a.tag_redraw()
+    x, y = mouse()
+    for dx in (1, -1):
+        xdo("mousemove", x + dx, y)
+        yield seconds / 2
+
+
+def log(*args):
+    print("[session]", *args, flush=True)
+
+
+# -- what the screen must show -----------------------------------------------------------
+
+
+def stored_coefficients(scene):
+    """The lighting the scene stores: c_lm times the gain s_lm when there is one."""
+    rows = []
+    for name in NAMES:
+        rgb = np.array(list(scene[name]), dtype=np.float64)
+        rows.append(rgb * float(scene.get(name + "_gain", 1.0)))
+    return np.array(rows)
+
+
+def irradiance(L, n):
+    """Eq. 13 at unit normals ``n`` (N, 3): (N, 3) RGB irradiance."""
+    x, y, z = (n[:, i : i + 1] for i in range(3))
+    return (C1 * L[8] * (x * x - y * y) + C3 * L[6] * z * z + C4 * L[0] - C5 * L[6]
+            + 2 * C1 * (L[4] * x * y + L[7] * x * z + L[5] * y * z)
+            + 2 * C2 * (L[3] * x + L[1] * y + L[2] * z))
+
+
+def srgb(linear):
+    linear = np.clip(linear, 0.0, 1.0)
+    return np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * linear ** (1 / 2.4) - 0.055)
+
+
+def predicted(scene):
+    samples = state["samples"]
+    L = stored_coefficients(scene)
+    E = np.maximum(irradiance(L, samples["normal"]), 0.0)
+    linear = samples["albedo"] * E / math.pi * 2.0 ** scene.view_settings.exposure
+    return srgb(linear) * 255.0
+
+
+def sample_objects(objects):
+    """Pixels of the viewport showing ``objects`` away from face edges, their normals and
+    albedos, found by ray casts through the pixels (the view must be drawn already)."""
+    v3d = area("VIEW_3D")
+    reg = region(v3d, "WINDOW")
+    rv3d = v3d.spaces.active.region_3d
+    sidebar_x = region(v3d, "UI").x - reg.x
+    deps = bpy.context.evaluated_depsgraph_get()
+    scene = bpy.context.scene
+    albedo = {o.name: np.array(o.active_material.node_tree.nodes["Principled BSDF"]
+                               .inputs["Base Color"].default_value[:3]) for o in objects}
+
+    def cast(px, py):
+        origin = view3d_utils.region_2d_to_origin_3d(reg, rv3d, (px, py))
+        direction = view3d_utils.region_2d_to_vector_3d(reg, rv3d, (px, py))
+        hit, _loc, _normal, index, obj, matrix = scene.ray_cast(deps, origin, direction)
+        if not hit:
+            return None
+        # The polygon's normal (what flat shading shades with), not the hit triangle's.
+        normal = matrix.to_3x3().inverted_safe().transposed() @ obj.data.polygons[index].normal
+        return obj.name, index, normal.normalized()
+
+    xs, ys, normals, albedos, names = [], [], [], [], []
+    left = region(v3d, "TOOLS").width + 4
+    for py in range(4, reg.height - 4, GRID):
+        for px in range(left, sidebar_x - 4, GRID):
+            hit = cast(px, py)
+            if hit is None or hit[0] not in albedo:
+                continue
+            same = all((cast(px + dx, py + dy) or (None, None))[:2] == hit[:2]
+                       for dx, dy in ((2, 0), (-2, 0), (0, 2), (0, -2)))
+            if not same:
+                continue
+            sx, sy = to_screen(reg, px, py)
+            xs.append(sx)
+            ys.append(sy)
+            normals.append(tuple(hit[2]))
+            albedos.append(albedo[hit[0]])
+            names.append(hit[0])
+    state["samples"] = {"x": np.array(xs), "y": np.array(ys), "normal": np.array(normals),
+                        "albedo": np.array(albedos), "object": np.array(names)}
+    log("samples", {n: names.count(n) for n in albedo})
+
+
+def compare(scene):
+    """Measured against predicted colours: a dict of the figures a check reports."""
+    s = state["samples"]
+    image = grab()
+    measured = image[s["y"], s["x"]].astype(np.float64)
+    expect = predicted(scene)
+    error = np.abs(measured - expect).max(axis=1)
+    figures = {"pixels": int(len(error)),
+               "matching": float(np.mean(error <= PIXEL_TOLERANCE)),
+               "p99_error": float(np.percentile(error, 99)), "max_error": float(error.max()),
+               "objects": {}}
+    ok = figures["matching"] >= MATCH_FRACTION
+    for name in np.unique(s["object"]):
+        sel = s["object"] == name
+        m, p = measured[sel].mean(axis=0), expect[sel].mean(axis=0)
+        figures["objects"][str(name)] = {"measured_mean": [round(v, 2) for v in m],
+                                         "predicted_mean": [round(v, 2) for v in p]}
+        ok = ok and bool(np.abs(m - p).max() <= MEAN_TOLERANCE)
+    figures["ok"] = ok
+    figures["view"] = [scene.view_settings.view_transform, scene.view_settings.look,
+                       scene.view_settings.exposure, scene.display_settings.display_device]
+    return figures, measured
+
+
+def check(name, condition, **details):
+    entry = {"name": name, "passed": bool(condition), **details}
+    results["checks"].append(entry)
+    log("CHECK", name, "PASS" if condition else "FAIL", json.dumps(details)[:600])
+    write_results()
+
+
+def viewport_follows(name, must_change=True):
+    """A generator step: poll the screen until the object pixels match the stored lighting.
+
+    Also records whether the pixels changed from the last check (they must when the
+    prediction moved by more than 3 steps somewhere).
+    """
+    scene = bpy.context.scene
+    start = time.monotonic()
+    while True:
+        figures, measured = compare(scene)
+        if figures["ok"] or time.monotonic() - start > MATCH_TIMEOUT:
+            break
+        yield 1.0
+    figures["seconds"] = round(time.monotonic() - start, 1)
+    previous = state.get("last_measured")
+    expect = predicted(scene)
+    if previous is not None and must_change:
+        moved = float(np.abs(expect - state["last_predicted"]).max())
+        changed = float(np.abs(measured - previous).max())
+        figures["prediction_moved"] = round(moved, 1)
+        figures["pixels_moved"] = round(changed, 1)
+    state["last_measured"], state["last_predicted"] = measured, expect
+    figures["coefficients"] = [[round(v, 4) for v in row] for row in stored_coefficients(scene)]
+    np.savez(os.path.join(SHOTS, f"pixels_{len(results['checks']):02d}.npz"),
+             measured=measured, predicted=expect, **state["samples"])
+    check(name, figures.pop("ok"), **figures)
+
+
+def write_results():
+    with open(os.path.join(SHOTS, "results.json"), "w") as f:
+        json.dump(results, f, indent=1)
+
+
+# -- the session ----------------------------------------------------------------------------
+
+
+def setup_scene():
+    """What an artist sets up before reaching for the add-on: a world image, a Suzanne next
+    to the cube, the Standard view transform (so that screen colours are plain sRGB)."""
+    scene = bpy.context.scene
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.render.dither_intensity = 0.0
+    folder = bpy.utils.system_resource("DATAFILES", path="studiolights/world")
+    world = scene.world
+    world.use_nodes = True
+    tree = world.node_tree
+    env = tree.nodes.new("ShaderNodeTexEnvironment")
+    env.image = bpy.data.images.load(os.path.join(folder, "forest.exr"))
+    env.location = (-300, 300)
+    tree.links.new(env.outputs["Color"], tree.nodes["Background"].inputs["Color"])
+    state["background"] = tree.nodes["Background"]
+
+    bpy.ops.mesh.primitive_monkey_add(location=(0.0, 2.8, 0.2), rotation=(0, 0, math.radians(-30)))
+    monkey = bpy.context.active_object
+    material = bpy.data.materials.new("Suzanne")
+    material.use_nodes = True
+    material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (
+        0.8, 0.35, 0.15, 1.0)
+    monkey.data.materials.append(material)
+    cube = bpy.data.objects["Cube"]
+    state["objects"] = (cube, monkey)
+
+    v3d = area("VIEW_3D")
+    space = v3d.spaces.active
+    space.overlay.show_overlays = False
+    space.show_gizmo = False
+    space.shading.type = "MATERIAL"
+    space.show_region_ui = True
+    rv3d = space.region_3d
+    rv3d.view_perspective = "PERSP"
+    rv3d.view_location = Vector((0.3, 1.3, 0.2))
+    rv3d.view_rotation = Euler((math.radians(62), 0.0, math.radians(62))).to_quaternion()
+    rv3d.view_distance = 11.0
+    area("PROPERTIES").spaces.active.context = "WORLD"
+    # Apply's mode as the artist last chose it (Adjust Last Operation): Emission Only, the
+    # exact SH lighting the pixels are predicted from (Keep BSDF adds the BSDF under the
+    # viewport's own lighting).
+    last = bpy.context.window_manager.operator_properties_last("shlight.apply")
+    if "mode" in last.bl_rna.properties:
+        last.mode = "EMISSION"
+
+
+def calibrate():
+    """SH_GUI_CALIBRATE=1: the panels with coefficients, for reading off click targets."""
+    yield 2.0
+    xdo("mousemove", 960, 600)
+    xdo("key", "Escape")
+    yield 1.0
+    setup_scene()
+    yield 2.0
+    v3d = area("VIEW_3D")
+    ui = region(v3d, "UI")
+    x, y, w, _h = region_rect(ui)
+    yield from click((x + w - 12, y + 180))
+    yield 1.0
+    shot("cal_00_sidebar", region_rect(ui))
+    with bpy.context.temp_override(window=window(), area=v3d, region=ui):
+        bpy.ops.shlight.compute_from_world()
+    for obj in state["objects"]:
+        obj.select_set(True)
+    with bpy.context.temp_override(window=window(), area=v3d, region=ui):
+        bpy.ops.shlight.apply()
+    xdo("mousemove", x + 100, y + 300)
+    yield from settle()
+    yield from settle()
+    shot("cal_01_sidebar", region_rect(ui))
+    yield from click((x + 60, y + 544))
+    yield from settle()
+    shot("cal_04_design", region_rect(ui))
+    yield from click((x + 75, y + 592))
+    yield from settle(1.0)
+    shot("cal_05_popup")
+    key("Escape")
+    yield 0.5
+    props = area("PROPERTIES")
+    shot("cal_02_properties", region_rect(region(props, "WINDOW")))
+    shot("cal_03_screen")
+
+
+def typed(text):
+    xdo("type", "--delay", "40", text)
+
+
+def key(*names):
+    xdo("key", "--delay", "60", *names)
+
+
+def drag(start, dx, steps=10):
+    """A generator step: press at ``start``, move ``dx`` px right in ``steps``, release."""
+    xdo("mousemove", *start)
+    yield 0.4
+    xdo("mousedown", 1)
+    yield 0.2
+    for i in range(1, steps + 1):
+        xdo("mousemove", start[0] + round(dx * i / steps), start[1])
+        yield 0.05
+    xdo("mouseup", 1)
+    yield 0.5
+
+
+def type_into(point, text):
+    """A generator step: click a number field (a click without a drag edits it as text),
+    select all, type, Return."""
+    yield from click(point)
+    key("ctrl+a")
+    typed(text)
+    key("Return")
+    yield 0.5
+
+
+def gain_or_row(scene, index):
+    """The strength the row of coefficient ``index`` shows: its gain, or (before the gain data
+    model) the mean of its triple."""
+    name = NAMES[index]
+    if name + "_gain" in scene:
+        return float(scene[name + "_gain"])
+    return float(np.mean(list(scene[name])))
+
+
+def row_y(index):
+    """The height of coefficient line ``index`` in the sidebar (lines closed)."""
+    return TARGETS["row0"][1] + round(index * TARGETS["row_step"])
+
+
+def in_viewport():
+    """A point in the 3D viewport away from the objects (for key presses there)."""
+    reg = region(area("VIEW_3D"), "WINDOW")
+    return to_screen(reg, reg.width * 0.5, reg.height * 0.9)
+
+
+def S():
+    """The scene (fetched each time: an undo replaces it)."""
+    return bpy.context.scene
+
+
+def session():
+    yield 2.0
+    xdo("mousemove", 960, 600)
+    xdo("key", "Escape")  # the splash screen
+    yield 1.0
+    setup_scene()
+    yield 2.0
+    v3d = area("VIEW_3D")
+    ui = region(v3d, "UI")
+    x, y, w, _h = region_rect(ui)
+    # The sidebar's "SH Lighting" tab (tabs: Item, Tool, View, SH Lighting).
+    yield from click((x + w - 12, y + 180))
+    yield from settle()
+    check("sidebar tab shows SH Lighting", ui.active_panel_category == "SH Lighting",
+          category=ui.active_panel_category)
+    shot("panel_sidebar_empty", region_rect(ui))
+
+    # Compute: a click on the button.
+    yield from click(sidebar_point(*TARGETS["compute_empty"]))
+    yield from settle()
+    computed = all(n in S() for n in NAMES)
+    check("Compute button computes", computed)
+    if not computed:
+        shot("failed_compute")
+        return
+    shot("panel_sidebar", region_rect(ui))
+
+    # Apply to the cube and Suzanne (selected by the artist), a click on Apply.
+    for obj in state["objects"]:
+        obj.select_set(True)
+    yield 0.5
+    yield from click(sidebar_point(*TARGETS["apply"]))
+    yield from settle()
+    sample_objects(state["objects"])
+    yield from viewport_follows("Apply: viewport shows the stored lighting (Material Preview)",
+                                must_change=False)
+    shot("scene_material_preview")
+
+    # The artist makes the world darker and computes again.
+    state["background"].inputs["Strength"].default_value = 0.6
+    yield 0.5
+    yield from click(sidebar_point(*TARGETS["compute"]))
+    yield from viewport_follows("Compute again (world Strength 0.6): viewport follows")
+    state["computed"] = stored_coefficients(S())
+
+    # Drag the L10 strength 40 px to the right.
+    before = gain_or_row(S(), 2)
+    yield from drag(sidebar_point(TARGETS["strength_x"], row_y(2)), 40)
+    after = gain_or_row(S(), 2)
+    check("drag on the L10 strength changes it by a fine step", 0.0 < after - before < 1.0,
+          before=round(before, 4), after=round(after, 4))
+    yield from viewport_follows("L10 drag: viewport follows")
+
+    # Type a value.
+    yield from type_into(sidebar_point(TARGETS["strength_x"], row_y(2)), "0.5")
+    check("typed L10 strength is stored", abs(gain_or_row(S(), 2) - 0.5) < 1e-6,
+          value=gain_or_row(S(), 2))
+    yield from viewport_follows("L10 typed 0.5: viewport follows")
+
+    # Open L00's channels, type G = 1.5, close them.
+    yield from click(sidebar_point(TARGETS["name_x"], row_y(0)))
+    yield from settle()
+    shot("panel_sidebar_channels", region_rect(ui))
+    yield from type_into(sidebar_point(TARGETS["strength_x"], row_y(0) + TARGETS["channel_g"]),
+                         "1.5")
+    check("typed L00 G channel is stored", abs(float(S()["sh_L00"][1]) - 1.5) < 1e-6,
+          value=list(S()["sh_L00"]))
+    yield from viewport_follows("L00 G = 1.5: viewport follows")
+    yield from click(sidebar_point(TARGETS["name_x"], row_y(0)))
+    yield from settle()
+
+    # Reset.
+    yield from click(sidebar_point(*TARGETS["reset"]))
+    check("Reset restores the computed values",
+          np.allclose(stored_coefficients(S()), state["computed"], atol=1e-5))
+    yield from viewport_follows("Reset: viewport follows")
+    state["reset"] = stored_coefficients(S())
+
+    # A preset from the header's preset menu.
+    yield from click(sidebar_point(*TARGETS["presets"]))
+    yield from settle(1.0)
+    shot("presets_menu")
+    yield from click(sidebar_point(*TARGETS["preset_entry"]))
+    yield from settle()
+    changed = not np.allclose(stored_coefficients(S()), state["reset"])
+    check("preset menu entry loads a preset", changed)
+    yield from viewport_follows("Preset loaded: viewport follows")
+
+    # Undo (Ctrl+Z over the viewport) returns to the values before the preset.
+    xdo("mousemove", *in_viewport())
+    yield 0.4
+    key("ctrl+z")
+    yield from settle()
+    check("Undo restores the values before the preset",
+          np.allclose(stored_coefficients(S()), state["reset"], atol=1e-5))
+    yield from viewport_follows("Undo: viewport follows")
+    before = stored_coefficients(S())
+
+    # Exposure: the Design panel's live Exposure popup, +1 stop typed in.
+    yield from click(sidebar_point(*TARGETS["design_header"]))
+    yield from settle()
+    shot("panel_sidebar_design", region_rect(ui))
+    yield from click(sidebar_point(*TARGETS["exposure"]))
+    yield from settle(1.0)
+    shot("exposure_popup")
+    mx, my = mouse()
+    yield from type_into((mx + TARGETS["popup_field"][0], my + TARGETS["popup_field"][1]), "1")
+    check("Exposure +1 stop doubles the lighting",
+          np.allclose(stored_coefficients(S()), 2.0 * before, rtol=1e-5, atol=1e-6))
+    yield from viewport_follows("Exposure +1: viewport follows")
+    xdo("mousemove", *in_viewport())
+    yield 0.5
+    yield from click(sidebar_point(*TARGETS["design_header"]))  # fold Design again
+    yield from settle()
+
+    # Keyframes on the L10 strength at frames 1 and 11, then frame 6.
+    point = sidebar_point(TARGETS["strength_x"], row_y(2))
+    xdo("mousemove", *point)
+    yield 0.5
+    key("i")
+    yield 0.5
+    curves = [fc.data_path for fc in getattr(getattr(S().animation_data, "action", None),
+                                             "fcurves", ())]
+    check("I over the L10 strength inserts a keyframe", bool(curves), curves=curves)
+    first = gain_or_row(S(), 2)
+    xdo("mousemove", *in_viewport())
+    yield 0.3
+    key(*["Right"] * 10)
+    yield 0.5
+    yield from type_into(point, f"{first * 3:.4f}")
+    xdo("mousemove", *point)
+    yield 0.5
+    key("i")
+    yield 0.5
+    xdo("mousemove", *in_viewport())
+    yield 0.3
+    key(*["Left"] * 5)
+    yield from settle()
+    value = gain_or_row(S(), 2)
+    check("frame 6 lies between the two keys", S().frame_current == 6
+          and min(first, 3 * first) < value < max(first, 3 * first) and abs(first) > 1e-6,
+          frame=S().frame_current, first=first, at_frame=value)
+    yield from viewport_follows("Frame 6 between keyframes: viewport follows")
+
+    # The same in the Rendered (EEVEE) viewport.
+    v3d.spaces.active.shading.type = "RENDERED"
+    yield from settle()
+    yield from viewport_follows("Rendered (EEVEE) viewport shows the stored lighting",
+                                must_change=False)
+    shot("scene_rendered")
+    key("Right")
+    yield from settle()
+    yield from viewport_follows("Rendered, frame 7: viewport follows")
+    v3d.spaces.active.shading.type = "MATERIAL"
+    yield from files_and_presets()
+    yield from node_editor()
+    yield from properties_editor()
+    yield from preferences()
+
+
+def addon_module(name):
+    """A module of the installed extension (to read what it stores, never to act)."""
+    import importlib
+
+    return importlib.import_module(f"{ADDON}.blender.{name}")
+
+
+def popover(dy, dx=None):
+    """A point of the header's preset popover (``dy`` below the sidebar's top)."""
+    return sidebar_point(TARGETS["popover_x"] if dx is None else dx, dy)
+
+
+def file_browser():
+    """The file browser window's area, or None."""
+    for win in bpy.context.window_manager.windows:
+        for a in win.screen.areas:
+            if a.type == "FILE_BROWSER":
+                return a
+    return None
+
+
+def files_and_presets():
+    """Save (the dialog's name field takes typing at once), remove (the confirmation names the
+    preset), Import (opens in the .blend's folder), Export (one labelled entry per format)."""
+    preset_io = addon_module("preset_io")
+    folder = os.path.join(SHOTS, "..", "blend")
+    os.makedirs(folder, exist_ok=True)
+    blend = os.path.abspath(os.path.join(folder, "shot.blend"))
+    bpy.ops.wm.save_as_mainfile(filepath=blend)  # what File > Save As does
+    yield 1.0
+
+    yield from click(sidebar_point(*TARGETS["presets"]))
+    yield from settle(1.0)
+    yield from click(popover(TARGETS["popover_add"][1], TARGETS["popover_add"][0]))
+    yield from settle(1.0)
+    shot("preset_save_dialog")
+    typed("My Light")
+    yield 0.3
+    key("Return")
+    yield 0.5
+    key("Return")
+    yield from settle(1.0)
+    saved = "My_Light" in preset_io.user_presets() or "My Light" in preset_io.user_presets()
+    check("Save dialog: typing goes into the name field, Return saves",
+          saved, user_presets=sorted(preset_io.user_presets()))
+
+    yield from click(sidebar_point(*TARGETS["presets"]))
+    yield from settle(1.0)
+    shot("presets_menu_user")
+    yield from click(popover(TARGETS["popover_remove"][1], TARGETS["popover_remove"][0]))
+    yield from settle(1.0)
+    shot("preset_remove_confirm")
+    key("Return")
+    yield from settle(1.0)
+    check("Remove: the confirmed preset is gone", not preset_io.user_presets(),
+          user_presets=sorted(preset_io.user_presets()))
+
+    yield from click(sidebar_point(*TARGETS["presets"]))
+    yield from settle(1.0)
+    yield from click(popover(TARGETS["popover_import"]))
+    yield from settle(2.0)
+    browser = file_browser()
+    directory = browser.spaces.active.params.directory.decode() if browser else None
+    shot("import_file_browser")
+    check("Import opens in the .blend file's folder", directory is not None and
+          os.path.realpath(directory) == os.path.realpath(folder), directory=directory,
+          blend_folder=folder)
+    xdo("mousemove", 960, 600)
+    yield 0.3
+    key("Escape")
+    yield from settle(1.0)
+
+    yield from click(sidebar_point(*TARGETS["presets"]))
+    yield from settle(1.0)
+    xdo("mousemove", *popover(TARGETS["popover_export"]))
+    yield from settle(1.5)
+    shot("presets_export_menu")
+    x, y = popover(TARGETS["popover_export"])
+    yield from click((x + TARGETS["export_threejs"][0], y + TARGETS["export_threejs"][1]))
+    yield from settle(2.0)
+    browser = file_browser()
+    operator = browser.spaces.active.active_operator if browser else None
+    shot("export_file_browser")
+    check("Export three.js: the file browser's button names the format",
+          operator is not None and "three.js" in operator.bl_rna.name,
+          operator=operator.bl_rna.name if operator else None)
+    xdo("mousemove", 960, 600)
+    yield 0.3
+    key("Escape")
+    yield from settle(1.0)
+
+
+def node_editor():
+    """The cube's material in the Shader Editor: the group left of the Material Output, a
+    forward wire into Surface, its full name."""
+    v3d = area("VIEW_3D")
+    bpy.context.view_layer.objects.active = bpy.data.objects["Cube"]
+    v3d.ui_type = "ShaderNodeTree"
+    yield from settle(1.0)
+    with bpy.context.temp_override(window=window(), area=v3d,
+                                   region=region(v3d, "WINDOW")):
+        bpy.ops.node.view_all()
+    yield from settle()
+    shot("node_editor")
+    tree = bpy.data.materials["Material"].node_tree
+    group = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup")
+    output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    link = next(lk for lk in tree.links if lk.to_node == output)
+    check("node group left of the Material Output, forward wire, full name",
+          group.location.x + group.width < output.location.x and link.from_node == group
+          and group.width >= 180, group=[group.location.x, group.location.y, group.width],
+          output=[output.location.x, output.location.y])
+    v3d.ui_type = "VIEW_3D"
+    yield from settle(1.0)
+
+
+def properties_editor():
+    """World Properties at its default width, scrolled to the SH Lighting panel."""
+    props = area("PROPERTIES")
+    reg = region(props, "WINDOW")
+    x, y, w, h = region_rect(reg)
+    xdo("mousemove", x + w // 2, y + h // 2)
+    yield 0.3
+    for _ in range(12):
+        xdo("click", 5)  # the mouse wheel, down
+    yield from settle()
+    shot("panel_properties", region_rect(reg))
+
+
+def preferences():
+    """Disable and enable the extension in Preferences: panels and settings go and come
+    back, nothing raised."""
+    bpy.ops.screen.userpref_show(section="ADDONS")
+    yield from settle(2.0)
+    prefs = bpy.context.window_manager.windows[-1]
+    with bpy.context.temp_override(window=prefs):
+        bpy.ops.preferences.addon_disable(module=ADDON)
+    yield from settle(1.0)
+    shot("preferences_disabled")
+    gone = not hasattr(bpy.types, "SHLIGHT_PT_view3d") and not hasattr(S(), "sh_lighting")
+    check("disable in Preferences removes the panels and settings", gone)
+    with bpy.context.temp_override(window=prefs):
+        bpy.ops.preferences.addon_enable(module=ADDON)
+    yield from settle(1.0)
+    back = hasattr(bpy.types, "SHLIGHT_PT_view3d") and hasattr(S(), "sh_lighting")
+    check("enable in Preferences brings them back", back)
+    shot("preferences_enabled")
+
+
+TARGETS = {  # (dx, dy) inside the sidebar (291 px wide), from the calibration pictures
+    "compute_empty": (95, 48),
+    "compute": (95, 201),
+    "reset": (212, 201),
+    "apply": (75, 255),
+    "row0": (60, 318),
+    "row_step": 20.9,
+    "name_x": 60,
+    "strength_x": 196,
+    "channel_g": 44,
+    "design_header": (60, 544),
+    "exposure": (75, 595),
+    "presets": (222, 16),
+    "preset_entry": (220, 139),  # Grace Cathedral, the 5th shipped preset
+    "popup_field": (221, 51),  # the Stops field of the Exposure popup, from the mouse
+    "popover_x": 220,
+    "popover_add": (315, 302),
+    "popover_remove": (315, 294),
+    "popover_import": 339,
+    "popover_export": 365,
+    "export_threejs": (160, 21),  # from the Export entry
+}
+
+
+def main():
+    steps = calibrate() if os.environ.get("SH_GUI_CALIBRATE") else session()
+
+    def tick():
+        try:
+            return next(steps)
+        except StopIteration:
+            pass
+        except Exception:
+            traceback.print_exc()
+            results["error"] = traceback.format_exc()
+        write_results()
+        bpy.ops.wm.quit_blender()
+        return None
+
+    bpy.app.timers.register(tick, first_interval=1.0)
+
+
+main()
