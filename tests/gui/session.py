@@ -391,13 +391,16 @@ def key(*names):
 
 
 def drag(start, dx, steps=10):
-    """A generator step: press at ``start``, move ``dx`` px right in ``steps``, release."""
+    """A generator step: press at ``start``, move ``dx`` px right in ``steps``, release.
+
+    Relative moves: while dragging a number Blender hides the pointer and warps it back
+    (Continuous Grab), so each step must be a move of dx / steps from wherever it is."""
     xdo("mousemove", *start)
     yield 0.4
     xdo("mousedown", 1)
     yield 0.2
-    for i in range(1, steps + 1):
-        xdo("mousemove", start[0] + round(dx * i / steps), start[1])
+    for _ in range(steps):
+        xdo("mousemove_relative", "--", round(dx / steps), 0)
         yield 0.05
     xdo("mouseup", 1)
     yield 0.5
@@ -525,6 +528,7 @@ def session():
     changed = not np.allclose(stored_coefficients(S()), state["reset"])
     check("preset menu entry loads a preset", changed)
     yield from viewport_follows("Preset loaded: viewport follows")
+    shot("scene_lit", (v3d.x, screen_size()[1] - v3d.y - v3d.height, v3d.width, v3d.height))
 
     # Undo (Ctrl+Z over the viewport) returns to the values before the preset.
     xdo("mousemove", *in_viewport())
@@ -551,6 +555,11 @@ def session():
     xdo("mousemove", *in_viewport())
     yield 0.5
     yield from click(sidebar_point(*TARGETS["design_header"]))  # fold Design again
+    yield from settle()
+    yield from click(sidebar_point(*TARGETS["basis_header"]))  # the basis chart, then fold it
+    yield from settle()
+    shot("panel_sidebar_basis", region_rect(ui))
+    yield from click(sidebar_point(*TARGETS["basis_header"]))
     yield from settle()
 
     # Keyframes on the L10 strength at frames 1 and 11, then frame 6.
@@ -610,6 +619,28 @@ def popover(dy, dx=None):
     return sidebar_point(TARGETS["popover_x"] if dx is None else dx, dy)
 
 
+def open_popover():
+    """A generator step: click the header's preset icon and wait until the popover shows
+    (the screen around it changes; a busy machine may take seconds to draw it)."""
+    x, y = sidebar_point(*TARGETS["presets"])
+    before = grab()[y:y + 300, x - 150:x + 150].astype(int)
+    yield from click((x, y))
+    for _ in range(20):
+        yield 0.5
+        if np.abs(grab()[y:y + 300, x - 150:x + 150].astype(int) - before).max() > 30:
+            break
+    yield 1.0
+
+
+def wait_for_file_browser():
+    """A generator step: wait (up to 20 s) for the file browser to open."""
+    for _ in range(40):
+        if file_browser() is not None:
+            break
+        yield 0.5
+    yield from settle(1.0)
+
+
 def file_browser():
     """The file browser window's area, or None."""
     for win in bpy.context.window_manager.windows:
@@ -629,23 +660,23 @@ def files_and_presets():
     bpy.ops.wm.save_as_mainfile(filepath=blend)  # what File > Save As does
     yield 1.0
 
-    yield from click(sidebar_point(*TARGETS["presets"]))
-    yield from settle(1.0)
+    yield from open_popover()
     yield from click(popover(TARGETS["popover_add"][1], TARGETS["popover_add"][0]))
+    yield from settle(1.0)
     yield from settle(1.0)
     shot("preset_save_dialog")
     typed("My Light")
-    yield 0.3
-    key("Return")
     yield 0.5
-    key("Return")
+    key("Return")  # ends the text field
+    yield 1.0
+    if not preset_io.user_presets():
+        key("Return")  # the dialog's OK, if the first Return did not confirm it
     yield from settle(1.0)
     saved = "My_Light" in preset_io.user_presets() or "My Light" in preset_io.user_presets()
     check("Save dialog: typing goes into the name field, Return saves",
           saved, user_presets=sorted(preset_io.user_presets()))
 
-    yield from click(sidebar_point(*TARGETS["presets"]))
-    yield from settle(1.0)
+    yield from open_popover()
     shot("presets_menu_user")
     yield from click(popover(TARGETS["popover_remove"][1], TARGETS["popover_remove"][0]))
     yield from settle(1.0)
@@ -655,10 +686,9 @@ def files_and_presets():
     check("Remove: the confirmed preset is gone", not preset_io.user_presets(),
           user_presets=sorted(preset_io.user_presets()))
 
-    yield from click(sidebar_point(*TARGETS["presets"]))
-    yield from settle(1.0)
+    yield from open_popover()
     yield from click(popover(TARGETS["popover_import"]))
-    yield from settle(2.0)
+    yield from wait_for_file_browser()
     browser = file_browser()
     directory = browser.spaces.active.params.directory.decode() if browser else None
     shot("import_file_browser")
@@ -670,14 +700,13 @@ def files_and_presets():
     key("Escape")
     yield from settle(1.0)
 
-    yield from click(sidebar_point(*TARGETS["presets"]))
-    yield from settle(1.0)
+    yield from open_popover()
     xdo("mousemove", *popover(TARGETS["popover_export"]))
     yield from settle(1.5)
     shot("presets_export_menu")
     x, y = popover(TARGETS["popover_export"])
     yield from click((x + TARGETS["export_threejs"][0], y + TARGETS["export_threejs"][1]))
-    yield from settle(2.0)
+    yield from wait_for_file_browser()
     browser = file_browser()
     operator = browser.spaces.active.active_operator if browser else None
     shot("export_file_browser")
@@ -757,8 +786,9 @@ TARGETS = {  # (dx, dy) inside the sidebar (291 px wide), from the calibration p
     "name_x": 60,
     "strength_x": 196,
     "channel_g": 44,
-    "design_header": (60, 544),
-    "exposure": (75, 595),
+    "design_header": (60, 518),
+    "exposure": (75, 569),
+    "basis_header": (60, 544),
     "presets": (222, 16),
     "preset_entry": (220, 139),  # Grace Cathedral, the 5th shipped preset
     "popup_field": (221, 51),  # the Stops field of the Exposure popup, from the mouse

@@ -34,7 +34,7 @@ SESSION = Path(__file__).with_name("session.py")
 TOOL = ROOT.parent / "shared" / "tools" / "blender-gui-root"
 GUI_ROOT = Path(os.environ.get("BLENDER_GUI_ROOT", "/opt/blender-gui-root"))
 SCREEN = "1920x1200"
-TIMEOUT = 900  # s: the whole session, Blender start and EEVEE shader compiles included
+TIMEOUT = 1800  # s: the whole session, Blender start and EEVEE shader compiles included (a loaded machine)
 
 pytestmark = pytest.mark.gui
 
