@@ -624,12 +624,13 @@ def open_popover():
     (the screen around it changes; a busy machine may take seconds to draw it)."""
     x, y = sidebar_point(*TARGETS["presets"])
     before = grab()[y:y + 300, x - 150:x + 150].astype(int)
-    yield from click((x, y))
-    for _ in range(20):
-        yield 0.5
-        if np.abs(grab()[y:y + 300, x - 150:x + 150].astype(int) - before).max() > 30:
-            break
-    yield 1.0
+    for _attempt in range(3):  # after a dialog the first click may only focus the region
+        yield from click((x, y))
+        for _ in range(10):
+            yield 0.5
+            if np.abs(grab()[y:y + 300, x - 150:x + 150].astype(int) - before).max() > 30:
+                yield 1.0
+                return
 
 
 def wait_for_file_browser():
