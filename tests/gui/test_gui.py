@@ -31,7 +31,12 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "out" / "gui"
 SESSION = Path(__file__).with_name("session.py")
-TOOL = ROOT.parent / "shared" / "tools" / "blender-gui-root"
+# ../shared/tools/blender-gui-root beside the repository (or beside the folder of its git
+# worktrees); BLENDER_GUI_TOOL overrides.
+TOOL = Path(os.environ.get("BLENDER_GUI_TOOL") or next(
+    (p for p in (ROOT.parent / "shared" / "tools" / "blender-gui-root",
+                 ROOT.parent.parent / "shared" / "tools" / "blender-gui-root") if p.exists()),
+    ROOT.parent / "shared" / "tools" / "blender-gui-root"))
 GUI_ROOT = Path(os.environ.get("BLENDER_GUI_ROOT", "/opt/blender-gui-root"))
 SCREEN = "1920x1200"
 TIMEOUT = 1800  # s: the whole session, Blender start and EEVEE shader compiles included (a loaded machine)
