@@ -1,6 +1,9 @@
 """Command line of SH Lighting: compute, apply, render and batch, headless.
 
-Two ways to run it (``--help`` after any command shows its options):
+Three ways to run it (``--help`` after any command shows its options):
+
+* ``blender -c sh_lighting <command> ...`` (Blender 4.2+) with the extension installed and
+  enabled: the command the extension registers (``blender/command.py``).
 
 * ``python -m sh_lighting <command> ...`` with a Python where ``bpy`` (Blender as a module) and
   this package are importable, e.g. ``.venv/bin/python -m sh_lighting`` from the repository.
@@ -29,15 +32,20 @@ inputs, and a path starting with ``//`` is relative to the .blend's folder, as i
   materials of all (or the named) objects of the scene (keeping their BSDF, or as emission
   only), then saves. An output is required: ``--out`` (refused if it exists,
   unless ``--overwrite``; never the input itself) or ``--in-place`` (replaces the input).
-* ``render [BLEND] --output PATH [--frame N | --frames A B] [--engine E] [--samples N]``:
-  renders frames headless; PATH follows Blender's ``-o`` rules (``#`` → frame number, else 4
-  digits appended; the format's extension added). Existing frames are replaced, like Blender.
-* ``batch HDRI_DIR OUT_DIR [--force] [--pattern '*.exr,*.hdr'] [--nonfinite raise|zero]``:
+* ``render [BLEND] --output PATH [--frame N | --frames A B | --frames A-B] [--engine E]
+  [--samples N] [--skip-existing]``: renders frames headless; PATH follows Blender's ``-o``
+  rules (``#`` → frame number, else 4 digits appended; the format's extension added). Existing
+  frames are replaced, like Blender, or kept with ``--skip-existing`` (a rerun resumes).
+* ``batch HDRI_DIR OUT_DIR [--force] [--pattern '*.exr,*.hdr'] [--nonfinite raise|zero]
+  [--files A-B] [--expect-files N]``:
   one preset per HDRI, ``OUT_DIR/<stem>.json``, a progress line per file and a total;
   existing presets are kept unless ``--force`` (so an interrupted batch resumes; the
   temporary files a killed batch left are removed and reported); a bad file, and anything
   matching the pattern that is not a readable file (a folder, a broken link), is reported
-  and the others are still processed.
+  and the others are still processed. ``--files`` takes the A-th to B-th entry of the sorted
+  list (one task of a farm job; only its own files' leftovers are removed, since other tasks
+  may be writing theirs), ``--expect-files`` refuses a folder that does not hold the N
+  entries the job was split for.
 
 Exit status: 0 on success, 1 when a command (or any file of a batch) failed, 2 for wrong
 arguments or when the package cannot be found. Errors go to stderr as ``sh_lighting: error:``.
@@ -48,6 +56,7 @@ import fnmatch
 import importlib
 import math
 import os
+import re
 import sys
 import tempfile
 import time
@@ -496,6 +505,9 @@ def cmd_render(args):
     for index, frame in enumerate(frames, start=1):
         t0 = time.perf_counter()
         target = frame_target(scene, args.output, frame)
+        if args.skip_existing and target.exists():
+            _print(f"[{index}/{len(frames)}] frame {frame}: skipped ({target} exists)")
+            continue
         render_frame(scene, args.output, frame, target, blend)
         _print(f"[{index}/{len(frames)}] frame {frame}: {target} "
                f"({time.perf_counter() - t0:.2f} s)")
@@ -599,12 +611,27 @@ def cmd_batch(args):
     files = _hdri_files(folder, args.pattern)
     if not files:
         raise CommandError(f"no file matching {args.pattern} in '{folder}'")
-    remove_batch_leftovers(out_dir)
+    if args.expect_files is not None and len(files) != args.expect_files:
+        raise CommandError(
+            f"'{folder}' holds {len(files)} file(s) matching {args.pattern}, not the "
+            f"{args.expect_files} expected: nothing done (submit the job again for this folder)"
+        )
+    first, last = (1, len(files)) if args.files is None else args.files
+    if not 1 <= first <= last <= len(files):
+        raise CommandError(f"--files {first}-{last}: '{folder}' holds files 1-{len(files)} "
+                           f"matching {args.pattern}")
+    if args.files is None:
+        remove_batch_leftovers(out_dir)
+    else:  # one task of a farm job: other tasks may be writing their presets right now
+        for path in files[first - 1:last]:
+            remove_own_leftovers(out_dir / f"{path.stem}.json")
     inputs = file_ids(files)
     counts = {"ok": 0, "skipped": 0, "failed": 0}
     failed, claimed = [], {}
+    for path in files[:first - 1]:  # names taken before the selection, as in a whole batch
+        claimed.setdefault(f"{path.stem}.json", path.name)
     start = time.perf_counter()
-    for index, path in enumerate(files, start=1):
+    for index, path in enumerate(files[first - 1:last], start=first):
         t0 = time.perf_counter()
         out = out_dir / f"{path.stem}.json"
         prefix = f"[{index}/{len(files)}] {path.name}"
@@ -625,7 +652,7 @@ def cmd_batch(args):
         else:
             _print(f"{prefix}: ok ({time.perf_counter() - t0:.2f} s)")
     _print(
-        f"{len(files)} file(s): {counts['ok']} ok, {counts['skipped']} skipped, "
+        f"{last - first + 1} file(s): {counts['ok']} ok, {counts['skipped']} skipped, "
         f"{counts['failed']} failed in {time.perf_counter() - start:.2f} s"
     )
     if failed:
@@ -634,6 +661,30 @@ def cmd_batch(args):
 
 
 # --- arguments -------------------------------------------------------------------------------
+
+
+def _range(text):
+    """(first, last) of "A-B" or "A", the form of an Open Job Description chunk ("1-8")."""
+    match = re.fullmatch(r"(-?\d+)(?:-(-?\d+))?", text.strip())
+    if match is None:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a range A-B or a whole number")
+    return int(match[1]), int(match[2] if match[2] is not None else match[1])
+
+
+class _FrameRange(argparse.Action):
+    """``--frames A B`` or ``--frames A-B``, stored as (A, B)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        try:
+            if len(values) == 1:
+                value = _range(values[0])
+            elif len(values) == 2:
+                value = tuple(int(v) for v in values)
+            else:
+                raise ValueError
+        except (ValueError, argparse.ArgumentTypeError):
+            parser.error(f"{option_string} {' '.join(values)}: give frames A B, or A-B")
+        setattr(namespace, self.dest, value)
 
 
 def _positive(text):
@@ -796,11 +847,13 @@ def build_parser(prog=PROG):
                    help="output path pattern (absolute, relative, or // for the .blend's folder)")
     frames = p.add_mutually_exclusive_group()
     frames.add_argument("--frame", type=int, metavar="N", help="render frame N only")
-    frames.add_argument("--frames", type=int, nargs=2, metavar=("A", "B"),
-                        help="render frames A to B inclusive")
+    frames.add_argument("--frames", nargs="+", action=_FrameRange, metavar="A B | A-B",
+                        help="render frames A to B inclusive (two numbers, or a range A-B)")
     p.add_argument("--engine", choices=("CYCLES", "EEVEE"),
                    help="render engine (default: the scene's)")
     p.add_argument("--samples", type=_positive, metavar="N", help="render samples")
+    p.add_argument("--skip-existing", action="store_true",
+                   help="keep frames whose output file exists (a rerun resumes)")
     p.add_argument("--scene", metavar="NAME", help="scene to render (default: active)")
     p.set_defaults(run=cmd_render)
 
@@ -816,6 +869,12 @@ def build_parser(prog=PROG):
     p.add_argument("hdri_dir", metavar="HDRI_DIR", help="folder of equirectangular HDRIs")
     p.add_argument("out_dir", metavar="OUT_DIR", help="folder of the presets (created)")
     p.add_argument("--force", action="store_true", help="recompute presets that exist")
+    p.add_argument("--files", type=_range, metavar="A-B",
+                   help="only the A-th to B-th matching files, counted from 1 in the order "
+                   "listed (names, any case): one task of a farm job")
+    p.add_argument("--expect-files", type=_positive, metavar="N",
+                   help="fail before any work unless the folder holds exactly N matching "
+                   "files (the count a farm job was split for)")
     p.add_argument("--pattern", default=DEFAULT_PATTERNS, metavar="GLOBS",
                    help=f"comma-separated file name patterns, any case (default: "
                    f"{DEFAULT_PATTERNS})")
@@ -836,6 +895,18 @@ def main(argv=None, prog=PROG):
     except KeyboardInterrupt:
         print("sh_lighting: interrupted", file=sys.stderr, flush=True)
         return 130
+
+
+def run_blender_command(argv):
+    """``blender -c sh_lighting ARGS``: ``main`` on ARGS (registered by blender/command.py).
+
+    argparse's own exits (``--help``, wrong arguments) become the return value, which Blender
+    makes its exit status, instead of a SystemExit raised inside Blender's command runner.
+    """
+    try:
+        return main(list(argv), prog="blender -c sh_lighting")
+    except SystemExit as exit_:
+        return exit_.code if isinstance(exit_.code, int) else 0 if exit_.code is None else 2
 
 
 # --- run as a script (blender -b -P cli.py -- ...) -------------------------------------------

@@ -4,9 +4,9 @@ Each module exports ``register()``/``unregister()``; they are called in ``MODULE
 and undone in reverse.
 """
 
-from . import design_ui, lights_ui, operators, panels, preferences, presets_ui, properties
+from . import command, design_ui, lights_ui, operators, panels, preferences, presets_ui, properties
 
-MODULES = (preferences, properties, operators, panels, presets_ui, design_ui, lights_ui)
+MODULES = (preferences, properties, operators, panels, presets_ui, design_ui, lights_ui, command)
 
 
 def register():

@@ -1,0 +1,56 @@
+"""A stand-in for ``blender -c ID ARGS...`` built on the bpy module (no Blender program here).
+
+What Blender does for ``-c``/``--command`` (implying ``--background``): it registers the
+enabled add-ons and extensions, looks ID up among the commands registered with
+``bpy.utils.register_cli_command``, calls that command's ``execute`` with the arguments after
+ID and exits with its return value (an unknown ID: a message and status 1). This script does
+the same with the bpy module: it records what ``register_cli_command`` is given while
+``sh_lighting.register()`` runs (the real function is still called), then runs the recorded
+callback. Only the arguments the job bundles pass are understood: ``[-b] -c ID ARGS...``.
+
+Usage: python blender_stand_in.py [-b|--background] (-c|--command) ID ARGS...
+(the package must be importable: PYTHONPATH=<repository>)
+"""
+
+import os
+import sys
+
+
+def main(argv):
+    args = list(argv)
+    while args and args[0] in ("-b", "--background"):
+        args.pop(0)
+    if len(args) < 2 or args[0] not in ("-c", "--command"):
+        print(f"blender stand-in: expected [-b] -c ID ARGS..., got {argv}", file=sys.stderr)
+        return 2
+    command, rest = args[1], args[2:]
+
+    import bpy
+
+    registered = {}
+    real_register = bpy.utils.register_cli_command
+
+    def recording_register(identifier, execute):
+        registered[identifier] = execute
+        return real_register(identifier, execute)
+
+    bpy.utils.register_cli_command = recording_register
+    try:
+        import sh_lighting
+
+        sh_lighting.register()
+    finally:
+        bpy.utils.register_cli_command = real_register
+    if command not in registered:
+        print(f"Unrecognized command: '{command}'", file=sys.stderr)
+        return 1
+    return registered[command](rest)
+
+
+if __name__ == "__main__":
+    status = main(sys.argv[1:])
+    # Leave without interpreter shutdown, where the bpy 4.2 module (not Blender) crashes once
+    # an add-on registered properties with Python callbacks (see tests/conftest.py).
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
