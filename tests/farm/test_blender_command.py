@@ -23,13 +23,6 @@ from sh_lighting.core.presets import read_preset
 pytestmark = pytest.mark.blender
 
 
-@pytest.fixture(autouse=True)
-def factory_blender():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    yield
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-
-
 @pytest.fixture
 def registered(monkeypatch):
     """{id: (execute, handle)} of what sh_lighting.register() registers; unregistered after."""

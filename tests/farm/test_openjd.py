@@ -6,7 +6,7 @@ folders of the test. The Blender command of the bundles (job parameter BlenderCo
 shell script running ``tests/farm/blender_stand_in.py``, which takes Blender's ``-c ID ARGS``
 and calls the command that ``sh_lighting.register()`` registered with
 ``bpy.utils.register_cli_command``, in the bpy module of the Python running the tests (there
-is no Blender program here; tests/farm/test_blender_command.py runs the real Blender 4.3).
+is no Blender program here; tests/farm/test_real_blender.py runs the real Blender 4.3).
 
 Checked: every task's log (its chunk, its files or frames, its exit status) and every output
 (the presets' coefficients, the frames' pixels), nothing written outside the output folder
@@ -15,9 +15,6 @@ file failing its own task with its one-line error, and a job killed mid-task com
 rerun.
 """
 
-import hashlib
-import json
-import math
 import os
 import re
 import shlex
@@ -27,23 +24,15 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
-import yaml
-from blender_files import write_constant_exr
-from numpy.testing import assert_allclose
-from farm_scene import ALBEDO, SIZE, SKY, SKY_COEFFICIENTS, WORLD, build_scene, read_exr
+from farm_jobs import (
+    MAPS, ROOT, Job, check_frame, check_preset, error_lines, frame_names, tasks, write_maps,
+)
+from farm_scene import SKY_COEFFICIENTS, build_scene
 
-from sh_lighting.core.presets import read_preset, write_preset
+from sh_lighting.core.presets import write_preset
 
 pytestmark = [pytest.mark.blender, pytest.mark.slow]
-
-ROOT = Path(__file__).resolve().parents[2]
-BUNDLES = ROOT / "farm" / "openjd"
-FLOAT32_TOL = 1e-6  # presets of float32 EXRs
-RENDER_TOL = 1e-4  # Cycles' float32 shading of the node group's polynomial
-MAPS = {"a": (0.1, 0.2, 0.3), "b": (1.0, 0.5, 0.25), "C": (2.0, 2.0, 2.0),
-        "d": (0.0, 0.3, 0.6), "e": (4.0, 1.0, 0.0)}  # sorted by name, any case: a b C d e
 
 
 @pytest.fixture(scope="module")
@@ -59,100 +48,7 @@ def blender_command(tmp_path_factory):
     return path
 
 
-class Job:
-    """One job's folders: inputs, the output folder, HOME and TMPDIR of the run."""
-
-    def __init__(self, root, bundle, blender_command):
-        self.root, self.bundle, self.blender = root, bundle, blender_command
-        self.inputs, self.out = root / "inputs", root / "out"
-        self.home, self.tmp = root / "home", root / "tmp"
-        for folder in (self.inputs, self.home, self.tmp):
-            folder.mkdir()
-
-    def params(self, **values):
-        """The bundle's parameter file, then ``values``, as openjd's KEY: VALUE document."""
-        document = yaml.safe_load((BUNDLES / self.bundle / "parameter_values.yaml").read_text())
-        params = {p["name"]: p["value"] for p in document["parameterValues"]}
-        params.update(BlenderCommand=str(self.blender), **values)
-        path = self.root / "params.json"
-        path.write_text(json.dumps(params))
-        return path
-
-    def command(self, params, *extra):
-        return [sys.executable, "-m", "openjd", "run", str(BUNDLES / self.bundle / "template.yaml"),
-                "--job-param", f"file://{params}", *extra]
-
-    def env(self):
-        return {**os.environ, "HOME": str(self.home), "TMPDIR": str(self.tmp)}
-
-    def run(self, params, *extra):
-        """``openjd run`` to the end; returns (exit status, the tasks' logs)."""
-        process = subprocess.run(self.command(params, *extra), env=self.env(),
-                                 capture_output=True, text=True, timeout=600)
-        return process.returncode, parse_log(process.stdout + process.stderr)
-
-    def snapshot(self):
-        """Every file outside the output folder: its size and content hash."""
-        return {
-            str(p.relative_to(self.root)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in sorted(self.root.rglob("*"))
-            if p.is_file() and self.out not in p.parents and p.name != "params.json"
-        }
-
-    def check_nothing_outside(self, before):
-        assert self.snapshot() == before
-        assert list(self.home.iterdir()) == []  # nothing in HOME (Blender's config included)
-        # openjd removed its session folders (Blender's temporary files were in them)
-        assert [str(p.relative_to(self.tmp)) for p in self.tmp.rglob("*")] in ([], ["OpenJD"])
-
-
-def parse_log(text):
-    """The blocks of an ``openjd run`` log: [{"kind", "name", "lines", "exit"}], in order.
-
-    A block starts at ``--------- Running Task`` (kind "task", its name the chunk of its
-    CHUNK[INT] parameter, "" for a task without parameters) or at ``--------- Entering
-    Environment: NAME`` (kind "environment"); "exit" is the exit status of its command.
-    """
-    blocks = []
-    for raw in text.splitlines():
-        line = raw.split("\t", 1)[-1]
-        if line == "--------- Running Task":
-            blocks.append({"kind": "task", "name": "", "lines": [], "exit": None})
-        elif line.startswith("--------- Entering Environment: "):
-            name = line.split(": ", 1)[1]
-            blocks.append({"kind": "environment", "name": name, "lines": [], "exit": None})
-        elif blocks:
-            block = blocks[-1]
-            block["lines"].append(line)
-            if match := re.fullmatch(r"\w+\(CHUNK\[INT\]\) = (\S+)", line):
-                block["name"] = match[1]
-            if match := re.match(r"Process pid \d+ exited with code: (-?\d+)", line):
-                block["exit"] = int(match[1])
-    return blocks
-
-
-def tasks(blocks):
-    return {b["name"]: b for b in blocks if b["kind"] == "task"}
-
-
-def error_lines(block):
-    return [line for line in block["lines"] if line.startswith("sh_lighting: error:")]
-
-
 # --- prefilter -------------------------------------------------------------------------------
-
-
-def write_maps(folder):
-    for name, rgb in MAPS.items():
-        write_constant_exr(folder / f"{name}.exr", rgb, width=16, height=8)
-
-
-def check_preset(path, rgb):
-    coeffs, metadata = read_preset(path)
-    expected = np.zeros((9, 3))
-    expected[0] = 2.0 * math.sqrt(math.pi) * np.array(rgb)  # a constant map: L00 only
-    assert_allclose(coeffs, expected, rtol=FLOAT32_TOL, atol=FLOAT32_TOL)
-    assert metadata["name"] == path.stem
 
 
 def test_prefilter_bundle_every_task_then_a_rerun_skips(tmp_path, blender_command):
@@ -279,19 +175,6 @@ def render_job(tmp_path, blender_command):
     blend = build_scene(job.inputs / "shot.blend")
     preset = write_preset(job.inputs / "sky.json", SKY_COEFFICIENTS, {"name": "sky"})
     return job, blend, preset
-
-
-def check_frame(path):
-    """The sphere lit by the preset's sky (not by the world), the world around it."""
-    pixels = read_exr(path)
-    assert pixels.shape == (SIZE[1], SIZE[0], 4)
-    assert_allclose(pixels[SIZE[1] // 2, SIZE[0] // 2, :3], ALBEDO * np.array(SKY),
-                    rtol=RENDER_TOL)
-    assert_allclose(pixels[0, 0, :3], WORLD, rtol=RENDER_TOL)
-
-
-def frame_names(first, last):
-    return [f"shot_{frame:04d}.exr" for frame in range(first, last + 1)]
 
 
 def test_render_bundle_every_task(tmp_path, blender_command):
