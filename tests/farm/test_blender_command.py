@@ -83,10 +83,9 @@ def test_the_command_runs_the_command_line(registered, tmp_path, capsys):
     assert execute(["render", "--frames", "1", "2", "3"]) == 2
     assert "give frames A B, or A-B" in capsys.readouterr().err
     assert execute(["compute", str(tmp_path / "missing.exr")]) == 1
-    assert capsys.readouterr().err == (
-        f"sh_lighting: error: '{tmp_path / 'missing.exr'}' does not exist: give an HDRI image "
-        "or a .blend file\n"
-    )
+    error = capsys.readouterr().err
+    assert error.startswith("sh_lighting: error: ") and error.count("\n") == 1  # one line
+    assert f"'{tmp_path / 'missing.exr'}' does not exist" in error
 
     rgb = (0.25, 1.0, 3.0)
     hdri = write_constant_exr(tmp_path / "sky.exr", rgb)
