@@ -27,11 +27,12 @@ MAPS = {"a": (0.1, 0.2, 0.3), "b": (1.0, 0.5, 0.25), "C": (2.0, 2.0, 2.0),
 
 
 class Job:
-    """One job's folders: inputs, the output folder, HOME and TMPDIR of the run."""
+    """One job's folders: inputs, the output folder, HOME and TMPDIR of the run. The inputs'
+    and output's names hold a space, non-ASCII letters and shell characters."""
 
     def __init__(self, root, bundle, blender_command):
         self.root, self.bundle, self.blender = root, bundle, blender_command
-        self.inputs, self.out = root / "inputs", root / "out"
+        self.inputs, self.out = root / "in puts ü", root / "out; 'ä' $HOME"
         self.home, self.tmp = root / "home", root / "tmp"
         for folder in (self.inputs, self.home, self.tmp):
             folder.mkdir()

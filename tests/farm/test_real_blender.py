@@ -5,9 +5,10 @@ installed by Blender's own ``blender -b --command extension install-file``.
 Run there: ``blender -c sh_lighting --help`` and ``compute`` directly, then both job bundles
 under ``openjd run`` with BlenderCommand = a script that runs that Blender in the chroot,
 mapping paths (the job lives in ROOT/tmp/..., which Blender sees as /tmp/...), the way a farm
-maps a submitter's paths to a worker's. The scene is built by Blender 4.3 itself (a .blend
-saved by 5.0 is not for 4.3). Needs root and the chroot; skipped without them, and in the
-4.2 LTS suite, since it tests the same Blender 4.3 whatever bpy the suite has.
+maps a submitter's paths to a worker's. The scene is built by Blender 4.3 itself (4.3 refuses
+a .blend saved by 5.0: "incomplete header"). Needs root and the chroot; skipped without them,
+and in the 4.2 LTS suite, since it tests the same Blender 4.3 whatever bpy the suite has.
+About a minute.
 """
 
 import math
@@ -36,8 +37,11 @@ CHROOT = Path(os.environ.get("BLENDER_GUI_ROOT", "/opt/blender-gui-root"))
 pytestmark = [
     pytest.mark.blender,
     pytest.mark.slow,
-    pytest.mark.skipif(not (CHROOT / "usr" / "bin" / "blender").is_file() or os.geteuid() != 0,
-                       reason=f"needs root and Debian's Blender in {CHROOT}"),
+    pytest.mark.skipif(
+        os.geteuid() != 0 or not (CHROOT / "usr" / "bin" / "blender").is_file()
+        or not (CHROOT / "proc" / "self").exists() or not (CHROOT / "dev" / "null").exists(),
+        reason=f"needs root and Debian's Blender in {CHROOT}, set up by blender-gui-root "
+        "(its /proc and /dev mounted)"),
     pytest.mark.skipif(bpy.app.version < (5, 0, 0),
                        reason="the Blender 4.3 test runs once, in the 5.0 suite"),
 ]
