@@ -12,6 +12,7 @@ would make Blender refuse both ("registered duplicate command").
 import bpy
 
 COMMAND = "sh_lighting"
+classes = ()  # no Blender classes: the command is registered by its id
 
 _handles = []
 
