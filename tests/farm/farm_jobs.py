@@ -51,7 +51,11 @@ class Job:
                 "--job-param", f"file://{params}", *extra]
 
     def env(self):
-        return {**os.environ, "HOME": str(self.home), "TMPDIR": str(self.tmp)}
+        """A worker's environment: this HOME and TMPDIR, Blender's default user folders (none
+        of the test session's BLENDER_USER_* folders)."""
+        env = {name: value for name, value in os.environ.items()
+               if not name.startswith("BLENDER_USER_")}
+        return {**env, "HOME": str(self.home), "TMPDIR": str(self.tmp)}
 
     def run(self, params, *extra):
         """``openjd run`` to the end; returns (exit status, the tasks' logs)."""

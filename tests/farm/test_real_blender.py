@@ -66,6 +66,8 @@ def blender(tmp_path_factory):
             "done\n"
             'TMPDIR="${TMPDIR#"$root"}" XDG_CACHE_HOME="${XDG_CACHE_HOME#"$root"}" '
             f'exec chroot "$root" /usr/bin/env -u PYTHONPATH -u PYTHONHOME '
+            "-u BLENDER_USER_RESOURCES -u BLENDER_USER_CONFIG -u BLENDER_USER_SCRIPTS "
+            "-u BLENDER_USER_DATAFILES -u BLENDER_USER_EXTENSIONS "
             f'HOME={shlex.quote(inner)}/home blender "$@"\n'
         )
         script.chmod(0o755)
