@@ -180,7 +180,8 @@ def test_render_bundle_every_task(tmp_path, blender_command):
     job, blend, preset = render_job(tmp_path, blender_command)
     before = job.snapshot()
     params = job.params(BlendFile=str(blend), PresetFile=str(preset),
-                        OutputFolder=str(job.out), Frames="1-5", FramesPerTask=2)
+                        OutputFolder=str(job.out), Frames="1-5", FramesPerTask=2,
+                        ApplyMode="EMISSION")
     status, blocks = job.run(params)
     assert status == 0, blocks
 
@@ -205,7 +206,8 @@ def test_render_bundle_every_task(tmp_path, blender_command):
 def test_render_rerun_after_a_killed_task_completes_the_job(tmp_path, blender_command):
     job, blend, preset = render_job(tmp_path, blender_command)
     params = job.params(BlendFile=str(blend), PresetFile=str(preset),
-                        OutputFolder=str(job.out), Frames="1-20", FramesPerTask=10)
+                        OutputFolder=str(job.out), Frames="1-20", FramesPerTask=10,
+                        ApplyMode="EMISSION")
     process = subprocess.Popen(job.command(params), env=job.env(),
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 300

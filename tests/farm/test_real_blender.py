@@ -156,7 +156,8 @@ def test_both_bundles_with_blender_4_3(blender):
     (job.inputs / "farm_scene.py").unlink()
     preset = write_preset(job.inputs / "sky.json", SKY_COEFFICIENTS, {"name": "sky"})
     params = job.params(BlendFile=str(job.inputs / "shot.blend"), PresetFile=str(preset),
-                        OutputFolder=str(job.out), Frames="1-3", FramesPerTask=2)
+                        OutputFolder=str(job.out), Frames="1-3", FramesPerTask=2,
+                        ApplyMode="EMISSION")
     status, blocks = job.run(params)
     assert status == 0, blocks
     (apply,) = [b for b in blocks if b["name"] == "ApplyPreset"]
