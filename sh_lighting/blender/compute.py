@@ -17,9 +17,10 @@ from . import preferences, properties, scene_data, world
 
 def world_provenance(info):
     """The provenance ``store`` records for a ``world.WorldInfo``: source "WORLD", the world,
-    how it was read and what was read (image, its file, projection, Mapping rotation,
-    Strength; or the capture width)."""
-    record = {"source": "WORLD", "world": info.world, "method": info.source.upper()}
+    how it was read, the working colour space of the values and what was read (image, its
+    file, projection, Mapping rotation, Strength; or the capture width)."""
+    record = {"source": "WORLD", "world": info.world, "method": info.source.upper(),
+              "working_space": info.working_space}
     if info.source == "image":
         record["image"] = info.image
         image = bpy.data.images.get(info.image)

@@ -37,8 +37,6 @@ SUN_NAME = "SH Sun"
 SUN_MARKER = "sh_lighting_sun"  # custom property on the Sun object Split Sun made
 # Normals at which a window's error is measured against the world (brute force, eq. 1).
 COST_NORMALS = 256
-# Stored coefficients this close (relative to their largest) to the world's are "the world's".
-SAME_AS_WORLD = 1e-9
 
 WINDOWS = ("HANNING", "LANCZOS", "MINIMAL")
 DEFAULT_WIDTH = 3.0  # Hanning/Lanczos width L + 1 (core.windowing): (1, 3/4, 1/4) for Hanning
@@ -209,6 +207,24 @@ def window_for(kind, coeffs, width=DEFAULT_WIDTH):
     raise DesignError(f"unknown window {kind!r}: use one of {', '.join(WINDOWS)}")
 
 
+def _computed_from(scene, coeffs, image):
+    """Whether ``coeffs`` are exactly what Compute from World stored from ``image`` (a
+    ``world.ImageSource``) as it reads now: told by the stored Reset values and their
+    provenance (``compute.world_provenance``), nothing re-projected."""
+    computed = scene_data.get_computed(scene)
+    record = scene_data.computed_provenance(scene)
+    if computed is None or not np.array_equal(computed, coeffs) or record.get("sun"):
+        return False
+    rotation = image.rotation if image.rotation is not None else (0.0, 0.0, 0.0)
+    return (
+        record.get("method") == "IMAGE" and record.get("world") == image.world
+        and record.get("image") == image.image.name
+        and record.get("working_space") == image.working_space
+        and record.get("strength") == image.strength
+        and list(record.get("rotation", ())) == [float(v) for v in rotation]
+    )
+
+
 def _world_costs(scene, coeffs, kind, window, width):
     """({kind: WindowCost} of every window against the world image, ""), or ({}, why not)."""
     try:
@@ -218,12 +234,10 @@ def _world_costs(scene, coeffs, kind, window, width):
         return {}, "no error vs the world shown: it is not an equirectangular world image"
     except ValueError as why:  # WorldError: no world, missing image, ...
         return {}, f"no error vs the world shown: {why}"
-    # what Compute from World stores for this world (the same operations on the same pixels)
-    reference = map_coefficients(pixels, image.strength, image.rotation)
-    if np.abs(coeffs - reference).max() > SAME_AS_WORLD * np.abs(reference).max():
+    if not _computed_from(scene, coeffs, image):
         return {}, (
-            "no error vs the world shown: the coefficients are not the world's (edited since "
-            "Compute from World)"
+            "no error vs the world shown: the coefficients are not the world's as it is now "
+            "(edited, split or loaded since Compute from World, or the world changed)"
         )
     normals = spread_normals(COST_NORMALS)
     truth = map_irradiance(pixels, normals, image.strength, image.rotation)

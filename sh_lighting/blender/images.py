@@ -111,7 +111,8 @@ def image_pixels(image):
 
 
 def undecodable_reason(image):
-    """Why ``linear_pixels`` cannot decode ``image`` whatever its texels, or "" if it can.
+    """Why ``linear_pixels`` cannot decode ``image`` whatever its texels, or "" if it can
+    (``core.colour.BYTE_SPACES`` lists the 8-bit colour spaces it decodes).
 
     Looks at the image's settings only (no pixels are read).
     """
@@ -120,7 +121,10 @@ def undecodable_reason(image):
     settings = image.colorspace_settings
     if settings.is_data or settings.name in BYTE_SPACES:
         return ""
-    return f"8-bit image '{image.name}' is in colour space {settings.name}"
+    return (
+        f"8-bit image '{image.name}' is in colour space {settings.name}, which is not "
+        f"decoded directly (only {', '.join(BYTE_SPACES)} and Non-Color are)"
+    )
 
 
 def linear_pixels(image):
@@ -143,7 +147,8 @@ def linear_pixels(image):
     ):
         raise DecodeError(
             f"8-bit image '{image.name}' has transparent texels, which Blender shows "
-            "premultiplied by their alpha"
+            "premultiplied by their alpha: save it without alpha (RGB) to have it read "
+            "directly, or set its Alpha mode to None or Channel Packed to ignore the alpha"
         )
     settings = image.colorspace_settings
     if image.is_float or settings.is_data:

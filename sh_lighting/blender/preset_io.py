@@ -28,8 +28,8 @@ the world" (its tooltip says so), and Undo returns to the values before the impo
 
 Metadata of an exported preset: ``created`` (today), ``name`` (the file's stem unless given)
 and, when the scene's coefficients are exactly the ones last computed from the world and that
-world is an Environment Texture read directly, ``source`` (the image file), ``mapping`` and
-``strength``. Anything else is not known from a scene and is omitted (callers that know more,
+world was an Environment Texture read directly, ``source`` (the image file), ``mapping`` and
+``strength`` as the world reader saw them then (the provenance Compute from World stored). Anything else is not known from a scene and is omitted (callers that know more,
 such as ``sh_lighting.cli compute`` with its error estimate, pass ``metadata``).
 
 Shipped presets are the package's ``presets`` folder once installed (``tools/package.py``

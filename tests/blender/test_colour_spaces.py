@@ -188,8 +188,13 @@ def test_transparent_8bit_texels_are_left_to_cycles(tmp_path):
     coeffs, info = world_coefficients(bpy.context.scene, capture_width=32)
     assert info.source == "capture" and "transparent" in info.reason
     assert rel_err(coeffs, cycles(world, 32)) < 1e-3  # the capture is refined, the other not
-    with pytest.raises(DecodeError, match="transparent texels"):
+    with pytest.raises(DecodeError, match="transparent texels.*save it without alpha"):
         load_image_pixels(path)
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-m", "sh_lighting", "compute", path], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1
+    assert done.stderr.count("\n") == 1 and "transparent texels" in done.stderr
 
 
 # -- exports, presets, the cache and luminance follow the working space --------------------------

@@ -187,3 +187,28 @@ def test_another_scene_is_read_at_its_own_frame(tmp_path):
     bpy.context.scene.frame_current = 1
     assert read_world(other).strength == pytest.approx(3.0)
     assert read_world(bpy.context.scene).strength == pytest.approx(1.0)
+
+
+def test_window_costs_and_preset_metadata_follow_the_recorded_provenance(tmp_path, addon):
+    """Compute from World records what the reader saw (with the working space); the window's
+    error against the world is shown while the world still reads the same, and not after its
+    Strength changed (nothing is re-projected to find out). Preset metadata names the image,
+    Mapping and Strength the values were computed from, not the world's current ones."""
+    from sh_lighting import api
+    from sh_lighting.blender import design, preset_io, scene_data
+
+    world = image_world(tmp_path, smooth_pixels(16, 32), strength=2.0, rotation=(0.0, 0.0, 0.4))
+    scene = bpy.context.scene
+    coeffs = api.compute_from_world(scene)
+    record = scene_data.computed_provenance(scene)
+    assert record["working_space"] == "Linear Rec.709" and record["strength"] == 2.0
+    shown = design.apply_window(scene, "HANNING")
+    assert set(shown.costs) == set(design.WINDOWS) and shown.cost is shown.costs["HANNING"]
+    api.reset(scene)
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 3.0
+    hidden = design.apply_window(scene, "HANNING")
+    assert not hidden.costs and "world changed" in hidden.report()
+    api.reset(scene)
+    metadata = preset_io.scene_metadata(scene)
+    assert metadata["strength"] == 2.0 and metadata["mapping"] == pytest.approx([0, 0, 0.4])
+    assert np.array_equal(scene_data.get_coefficients(scene), coeffs)
