@@ -102,7 +102,8 @@ def test_capture_width_comes_from_the_scene_override(addon, monkeypatch):
     assert widths == [properties.DEFAULT_CAPTURE_WIDTH, 64, 64, 32, 66]
     assert_allclose(api.get_computed(scene), KNOWN)
     assert api.get_provenance(scene) == {
-        "source": "WORLD", "world": "fake", "method": "CAPTURE", "capture_width": 66
+        "source": "WORLD", "world": "fake", "method": "CAPTURE", "capture_width": 66,
+        "working_space": "Linear Rec.709",
     }
 
 
