@@ -622,9 +622,15 @@ def popover(dy, dx=None):
 def open_popover():
     """A generator step: click the header's preset icon and wait until the popover shows
     (the screen around it changes; a busy machine may take seconds to draw it)."""
+    # A popover a dialog was opened from stays open behind it: close whatever is open first
+    # (a click on the icon would close it instead of opening a new one).
+    xdo("mousemove", *in_viewport())
+    yield 0.5
+    key("Escape")
+    yield 1.0
     x, y = sidebar_point(*TARGETS["presets"])
     before = grab()[y:y + 300, x - 150:x + 150].astype(int)
-    for _attempt in range(3):  # after a dialog the first click may only focus the region
+    for _attempt in range(3):  # if a click only focused the region, click again
         yield from click((x, y))
         for _ in range(10):
             yield 0.5
