@@ -708,7 +708,8 @@ def files_and_presets():
     yield from settle(1.0)
 
     yield from open_popover()
-    xdo("mousemove", *popover(TARGETS["popover_export"]))
+    # In a popover a submenu opens on a click, not on hover: click Export, then the entry.
+    yield from click(popover(TARGETS["popover_export"]))
     yield from settle(1.5)
     shot("presets_export_menu")
     x, y = popover(TARGETS["popover_export"])
@@ -718,8 +719,8 @@ def files_and_presets():
     operator = browser.spaces.active.active_operator if browser else None
     shot("export_file_browser")
     check("Export three.js: the file browser's button names the format",
-          operator is not None and "three.js" in operator.bl_rna.name,
-          operator=operator.bl_rna.name if operator else None)
+          operator is not None and "three.js" in operator.bl_label,
+          operator=operator.bl_label if operator else None)
     xdo("mousemove", 960, 600)
     yield 0.3
     key("Escape")
@@ -804,7 +805,7 @@ TARGETS = {  # (dx, dy) inside the sidebar (291 px wide), from the calibration p
     "popover_remove": (315, 294),
     "popover_import": 339,
     "popover_export": 365,
-    "export_threejs": (160, 21),  # from the Export entry
+    "export_threejs": (-40, 45),  # from the Export entry: the submenu opens to its left
 }
 
 
