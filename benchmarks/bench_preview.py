@@ -15,7 +15,7 @@ import bpy
 import bpy.utils.previews
 import numpy as np
 
-from sh_lighting.blender.previews import IRRADIANCE_SIZE, to_preview
+from sh_lighting.blender.ui.previews import IRRADIANCE_SIZE, to_preview
 from sh_lighting.core import preview as core_preview
 from sh_lighting.core.preview import irradiance_sphere_image
 

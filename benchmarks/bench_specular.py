@@ -10,7 +10,7 @@ import numpy as np
 
 from benchmarks.bench_prefilter import paired_times
 from sh_lighting.core import project_equirect
-from sh_lighting.core.gltf_environment import gltf_text, specular_cube
+from sh_lighting.formats.gltf import gltf_text, specular_cube
 
 SIZES = ((512, 1024), (1024, 2048), (2048, 4096))
 REPEATS = 5

@@ -17,8 +17,8 @@ import time
 import bpy
 import numpy as np
 
-from sh_lighting.blender.images import image_pixels
-from sh_lighting.blender.world import world_coefficients
+from sh_lighting.blender.world.images import image_pixels
+from sh_lighting.blender.world.reader import world_coefficients
 from sh_lighting.core.equirect import texel_directions
 from sh_lighting.core.projection import project_equirect
 

@@ -24,8 +24,9 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-from sh_lighting.blender import compat, materials, scene_data
-from sh_lighting.blender.images import load_image_pixels
+from sh_lighting.blender import compat, scene_data
+from sh_lighting.blender.shading import materials
+from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core import project_equirect, reference_irradiance
 
 CAMERA_LOCATION = (3.0, -4.0, 2.5)

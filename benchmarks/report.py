@@ -50,7 +50,7 @@ from benchmarks.report_helpers import (  # noqa: E402
     samples_to_reach,
     synthetic_map,
 )
-from sh_lighting.blender.images import load_image_pixels  # noqa: E402
+from sh_lighting.blender.world.images import load_image_pixels  # noqa: E402
 from sh_lighting.core import irradiance, project_equirect, reference_irradiance  # noqa: E402
 from sh_lighting.core.windowing import (  # noqa: E402
     apply_window,

@@ -14,7 +14,7 @@ import bpy
 import numpy as np
 
 from sh_lighting.blender import compat
-from sh_lighting.blender.images import load_image_pixels
+from sh_lighting.blender.world.images import load_image_pixels
 
 from .render_bench import _settings, add_camera
 

@@ -24,7 +24,8 @@ edits (``rotate``, ``match_mapping``, ``exposure``, ``saturation``, ``band_gains
 
 import bpy
 
-from .blender.design import (  # lighting design: exact edits, windows, the sun split
+from .blender import scene_data as _scene_data
+from .blender.design.edits import (  # lighting design: exact edits, windows, the sun split
     DesignError,
     apply_window,
     band_gains,
@@ -37,7 +38,8 @@ from .blender.design import (  # lighting design: exact edits, windows, the sun 
     saturation,
     split_sun,
 )
-from .blender.preset_io import (  # presets and interop: JSON, three.js, glTF, Filament
+from .blender.design import lights as _lights
+from .blender.presets.files import (  # presets and interop: JSON, three.js, glTF, Filament
     FORMATS,
     export_preset,
     import_preset,
@@ -46,13 +48,11 @@ from .blender.preset_io import (  # presets and interop: JSON, three.js, glTF, F
     shipped_presets,
     user_presets,
 )
-from .blender import compute as _compute
-from .blender import lights as _lights
-from .blender import materials as _materials
-from .blender import nodes as _nodes
-from .blender import scene_data as _scene_data
-from .blender import world as _world
-from .core.presets import PresetError
+from .blender.shading import materials as _materials
+from .blender.shading import nodes as _nodes
+from .blender.world import compute as _compute
+from .blender.world import reader as _world
+from .formats.presets import PresetError
 
 WorldError = _world.WorldError
 

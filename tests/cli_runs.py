@@ -16,7 +16,7 @@ import bpy
 import numpy as np
 from blender_files import write_exr
 
-from sh_lighting.core.presets import write_preset
+from sh_lighting.formats.presets import write_preset
 
 ROOT = Path(__file__).resolve().parents[1]
 SKY = (0.2, 0.5, 1.5)

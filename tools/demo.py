@@ -16,7 +16,7 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-from sh_lighting.blender.images import load_image_pixels
+from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core.sh import coefficient_table
 from sh_lighting.core import (
     COEFFICIENT_NAMES,

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from sh_lighting.core.frames import paper_to_blender
-from sh_lighting.core.presets import write_preset
+from sh_lighting.formats.presets import write_preset
 
 ROOT = Path(__file__).resolve().parent.parent
 PRESETS = ROOT / "presets"
@@ -60,7 +60,7 @@ def hdri_presets():
     """{file stem: (coefficients, metadata)} for the 8 HDRIs that ship inside bpy."""
     import bpy
 
-    from sh_lighting.blender.images import load_image_pixels
+    from sh_lighting.blender.world.images import load_image_pixels
     from sh_lighting.core.irradiance import error_estimate
     from sh_lighting.core import project_equirect
 

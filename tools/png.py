@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from sh_lighting.core.png import png_bytes
+from sh_lighting.formats.png import png_bytes
 
 
 def write_png(path, rgb):

@@ -4,7 +4,11 @@ Each module exports ``register()``/``unregister()``; they are called in ``MODULE
 and undone in reverse.
 """
 
-from . import command, design_ui, lights_ui, operators, panels, preferences, presets_ui, properties
+from . import command, preferences, properties
+from .ui import design as design_ui
+from .ui import lights as lights_ui
+from .ui import operators, panels
+from .ui import presets as presets_ui
 
 MODULES = (preferences, properties, operators, panels, presets_ui, design_ui, lights_ui, command)
 

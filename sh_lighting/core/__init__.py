@@ -7,43 +7,27 @@ SIGGRAPH 2001. Coefficients are raw radiance L_lm in Blender world axes (z up), 
 
 from .equirect import direction_to_uv, texel_directions, texel_solid_angles, uv_to_direction
 from .frames import blender_to_y_up, paper_to_blender, y_up_to_blender
-from .interop import (
-    from_filament_sh_txt,
-    from_gltf_irradiance_coefficients,
-    from_threejs_sh,
-    to_filament_sh_txt,
-    to_gltf_irradiance_coefficients,
-    to_threejs_sh,
-)
 from .irradiance import (
     irradiance,
     irradiance_coefficients,
     irradiance_matrices,
     reference_irradiance,
 )
-from .presets import PresetError, preset_from_dict, preset_to_dict, read_preset, write_preset
 from .projection import project_equirect
 from .rotation import euler_xyz_matrix, rotate_coefficients, sh_rotation_matrix
 from .sh import COEFFICIENT_NAMES, lambert_band_factors, sh_basis, sh_index
 
 __all__ = [
     "COEFFICIENT_NAMES",
-    "PresetError",
     "blender_to_y_up",
     "direction_to_uv",
     "euler_xyz_matrix",
-    "from_filament_sh_txt",
-    "from_gltf_irradiance_coefficients",
-    "from_threejs_sh",
     "irradiance",
     "irradiance_coefficients",
     "irradiance_matrices",
     "lambert_band_factors",
     "paper_to_blender",
-    "preset_from_dict",
-    "preset_to_dict",
     "project_equirect",
-    "read_preset",
     "reference_irradiance",
     "rotate_coefficients",
     "sh_basis",
@@ -51,10 +35,6 @@ __all__ = [
     "sh_rotation_matrix",
     "texel_directions",
     "texel_solid_angles",
-    "to_filament_sh_txt",
-    "to_gltf_irradiance_coefficients",
-    "to_threejs_sh",
     "uv_to_direction",
-    "write_preset",
     "y_up_to_blender",
 ]

@@ -52,7 +52,7 @@ def to_world_direction(direction, euler):
 def map_coefficients(pixels, strength=1.0, euler=None, max_order=2):
     """L_lm of the world showing equirect ``pixels`` at ``strength`` through ``euler``.
 
-    s · (the image's L_lm rotated by Rᵀ): what ``sh_lighting.blender.world`` computes for
+    s · (the image's L_lm rotated by Rᵀ): what ``sh_lighting.blender.world.reader`` computes for
     such a world, for any pixels (e.g. a map with its sun taken out).
     """
     return apply_mapping(project_equirect(pixels, max_order=max_order), strength, euler)

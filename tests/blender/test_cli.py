@@ -20,8 +20,9 @@ from cli_runs import (
 from numpy.testing import assert_allclose
 
 from sh_lighting import cli
-from sh_lighting.blender import materials, scene_data
-from sh_lighting.core.presets import read_preset
+from sh_lighting.blender.shading import materials
+from sh_lighting.blender import scene_data
+from sh_lighting.formats.presets import read_preset
 
 pytestmark = pytest.mark.blender
 
@@ -99,7 +100,7 @@ def test_compute_blend_world_and_other_formats(inputs, tmp_path):
     assert result.returncode == 0, result.stderr
     assert "World 'Sky'" in result.stdout
     assert_allclose(table_row(result.stdout, "L00"), EXACT[0], atol=1e-5)
-    from sh_lighting.core.interop import from_filament_sh_txt
+    from sh_lighting.formats.interop import from_filament_sh_txt
 
     assert_allclose(from_filament_sh_txt(out.read_text()), EXACT, atol=FLOAT32_TOL)
 
@@ -223,7 +224,7 @@ def test_batch_progress_resume_force_and_bad_files(tmp_path):
 
 
 def test_script_mode_finds_the_package_or_says_what_to_install(inputs, tmp_path):
-    script = ROOT / "sh_lighting" / "cli.py"
+    script = ROOT / "sh_lighting" / "cli" / "__init__.py"
     found = run(script, "--", "compute", inputs["hdri"], cwd=tmp_path, python_args=())
     assert found.returncode == 0, found.stderr
     assert_allclose(table_row(found.stdout, "L00"), EXACT[0], atol=1e-5)

@@ -15,8 +15,9 @@ from cli_runs import EXACT, SKY, constant_pixels, make_inputs, run
 from numpy.testing import assert_allclose
 
 from sh_lighting import cli
-from sh_lighting.blender import materials, scene_data
-from sh_lighting.core.presets import read_preset, write_preset
+from sh_lighting.blender.shading import materials
+from sh_lighting.blender import scene_data
+from sh_lighting.formats.presets import read_preset, write_preset
 
 pytestmark = pytest.mark.blender
 

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from sh_lighting.blender import compat
-from sh_lighting.blender.capture import capture_world
-from sh_lighting.blender.images import DecodeError, load_image_pixels
-from sh_lighting.blender.world import world_coefficients
+from sh_lighting.blender.world.capture import capture_world
+from sh_lighting.blender.world.images import DecodeError, load_image_pixels
+from sh_lighting.blender.world.reader import world_coefficients
 from sh_lighting.core import colour
 from sh_lighting.core.projection import project_equirect
 
@@ -221,8 +221,9 @@ def test_exports_are_linear_rec709_and_presets_come_back(tmp_path, addon):
     """An ACEScg file exports what the same image gives in a Rec.709 file (in every format),
     and importing its preset gives back its ACEScg values."""
     from sh_lighting import api
-    from sh_lighting.blender import preset_io, scene_data
-    from sh_lighting.core.interop import to_threejs_sh
+    from sh_lighting.blender.presets import files as preset_io
+    from sh_lighting.blender import scene_data
+    from sh_lighting.formats.interop import to_threejs_sh
 
     rec709 = red_world_coefficients(tmp_path, "Linear Rec.709")
     acescg = red_world_coefficients(tmp_path, "ACEScg")
@@ -243,7 +244,7 @@ def test_exports_are_linear_rec709_and_presets_come_back(tmp_path, addon):
 def test_compute_again_follows_a_switched_working_space(tmp_path):
     """Compute has no cache (benchmarks/REPORT.md §5): computing again after switching the
     working space gives that space's coefficients."""
-    from sh_lighting.blender import world
+    from sh_lighting.blender.world import reader as world
 
     set_working_space("Linear Rec.709")
     red = np.zeros((8, 16, 3))
@@ -260,7 +261,8 @@ def test_compute_again_follows_a_switched_working_space(tmp_path):
 @needs_working_spaces
 def test_saturation_greys_with_the_working_spaces_luminance(addon):
     from sh_lighting import api
-    from sh_lighting.blender import design, scene_data
+    from sh_lighting.blender.design import edits as design
+    from sh_lighting.blender import scene_data
 
     set_working_space("ACEScg")
     scene = bpy.context.scene

@@ -20,10 +20,12 @@ from blender_scenes import (
 from numpy.testing import assert_allclose, assert_array_equal
 
 import sh_lighting
-from sh_lighting.blender import (compat, compute, design, design_ui, lights_ui, panels,
-                                 previews, scene_data)
-from sh_lighting.blender.images import image_pixels
-from sh_lighting.blender.world import world_coefficients
+from sh_lighting.blender import compat, scene_data
+from sh_lighting.blender.design import edits as design
+from sh_lighting.blender.ui import design as design_ui, lights as lights_ui, panels, previews
+from sh_lighting.blender.world import compute
+from sh_lighting.blender.world.images import image_pixels
+from sh_lighting.blender.world.reader import world_coefficients
 from sh_lighting.core import edits, windowing
 from sh_lighting.core.equirect import texel_directions, texel_solid_angles
 from sh_lighting.core.irradiance import reference_irradiance

@@ -39,7 +39,7 @@ import pytest
 import bpy
 from mathutils import Vector
 
-from sh_lighting.blender.images import load_image_pixels
+from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core import equirect
 
 pytestmark = pytest.mark.blender

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from sh_lighting import api
-from sh_lighting.blender import compat, lights, scene_data
-from sh_lighting.blender.images import load_image_pixels
+from sh_lighting.blender import compat, scene_data
+from sh_lighting.blender.design import lights
+from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core.irradiance import irradiance, relative_error, total_power
 from sh_lighting.core.sh import spread_normals
 from sh_lighting.core.world_map import map_irradiance

@@ -13,7 +13,7 @@ import pytest
 from conftest import HDRI_NAMES
 from quadrature import random_directions
 
-from sh_lighting.blender.images import load_image_pixels
+from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core import irradiance, project_equirect, reference_irradiance
 
 pytestmark = pytest.mark.blender

@@ -73,7 +73,7 @@ def test_materials_must_be_an_iterable_of_materials(addon, function):
 @pytest.fixture
 def user_dir(tmp_path, monkeypatch):
     """Blender's user folder in ``tmp_path`` (checked), so the real one is never touched."""
-    from sh_lighting.blender import preset_io
+    from sh_lighting.blender.presets import files as preset_io
 
     resources = tmp_path / "user_resources"
     monkeypatch.setenv("BLENDER_USER_RESOURCES", str(resources))
@@ -96,7 +96,7 @@ def user_dir(tmp_path, monkeypatch):
     ],
 )
 def test_user_preset_names_keep_their_letters(addon, user_dir, name, stem):
-    from sh_lighting.blender import preset_io
+    from sh_lighting.blender.presets import files as preset_io
 
     scene = bpy.context.scene
     api.set_coefficients(scene, KNOWN)
@@ -117,7 +117,7 @@ def test_capture_folders_a_killed_run_left_are_removed(tmp_path):
     import subprocess
     import sys
 
-    from sh_lighting.blender import capture
+    from sh_lighting.blender.world import capture
 
     finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                               capture_output=True, text=True, check=True)

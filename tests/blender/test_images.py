@@ -1,4 +1,4 @@
-"""sh_lighting.blender.images: Blender images -> (H, W, 4) float32 arrays, rows top to bottom."""
+"""sh_lighting.blender.world.images: Blender images -> (H, W, 4) float32 arrays, rows top to bottom."""
 
 import os
 import struct
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from blender_files import write_exr
 
-from sh_lighting.blender.images import image_pixels, load_image_pixels
+from sh_lighting.blender.world.images import image_pixels, load_image_pixels
 
 pytestmark = pytest.mark.blender
 

@@ -22,7 +22,7 @@ from benchmarks.shadow_scene import (
     principled_material,
 )
 from sh_lighting import api
-from sh_lighting.blender import keep_bsdf, materials
+from sh_lighting.blender.shading import keep_bsdf, materials
 from sh_lighting.core import project_equirect
 
 SIZE = 48

@@ -26,7 +26,9 @@ from blender_scenes import (
 
 from benchmarks.render_bench import add_camera
 from sh_lighting import api, cli
-from sh_lighting.blender import compat, design, preset_io, scene_data
+from sh_lighting.blender import compat, scene_data
+from sh_lighting.blender.design import edits as design
+from sh_lighting.blender.presets import files as preset_io
 
 pytestmark = pytest.mark.blender
 

@@ -19,7 +19,8 @@ import pytest
 from benchmarks.render_bench import add_camera
 from blender_files import SCRIPT
 from blender_scenes import black_world, check_against_core, read_exr, render, setup_render, unpack
-from sh_lighting.blender import compat, materials, nodes, scene_data
+from sh_lighting.blender import compat, scene_data
+from sh_lighting.blender.shading import materials, nodes
 from sh_lighting.core import irradiance, project_equirect, reference_irradiance
 
 pytestmark = pytest.mark.blender

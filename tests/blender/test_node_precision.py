@@ -10,7 +10,7 @@ import pytest
 from quadrature import random_directions
 from test_stability import NODE_GROUP_ORDER, NODE_ORDERS, eval_node_chain
 
-from sh_lighting.blender import nodes
+from sh_lighting.blender.shading import nodes
 from sh_lighting.blender.scene_data import GAIN_NAMES, PROPERTY_NAMES
 
 pytestmark = pytest.mark.blender

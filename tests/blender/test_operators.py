@@ -15,8 +15,11 @@ from blender_scenes import run_execute
 from numpy.testing import assert_allclose
 
 from sh_lighting import api
-from sh_lighting.blender import compat, materials, operators, properties, scene_data, world
-from sh_lighting.blender.world import WorldError
+from sh_lighting.blender import compat, properties, scene_data
+from sh_lighting.blender.shading import materials
+from sh_lighting.blender.ui import operators
+from sh_lighting.blender.world import reader as world
+from sh_lighting.blender.world.reader import WorldError
 
 COLOUR = (0.2, 0.5, 1.5)
 STRENGTH = 2.0
@@ -385,7 +388,7 @@ def test_cli_apply_reports_objects_without_a_material(addon, tmp_path, capsys):
     scene.collection.objects.link(bpy.data.objects.new("Bare", bpy.data.meshes.new("Bare")))
     bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "shot.blend"))
     preset = tmp_path / "known.json"
-    from sh_lighting.core.presets import write_preset
+    from sh_lighting.formats.presets import write_preset
 
     write_preset(preset, KNOWN)
     assert cli.main(["apply", str(preset), "--out", str(tmp_path / "out.blend")]) == 0

@@ -19,9 +19,11 @@ import pytest
 from blender_files import SCRIPT, WORLD, write_constant_exr
 from numpy.testing import assert_allclose, assert_array_equal
 
-from sh_lighting.blender import compat, panels, preset_io, presets_ui, scene_data
-from sh_lighting.core import atomic, interop
-from sh_lighting.core.presets import PresetError, read_preset, write_preset
+from sh_lighting.blender import compat, scene_data
+from sh_lighting.blender.ui import panels, presets as presets_ui
+from sh_lighting.blender.presets import files as preset_io
+from sh_lighting.formats import atomic, interop
+from sh_lighting.formats.presets import PresetError, read_preset, write_preset
 from tools import package
 from ui_layout import RecordingLayout
 

@@ -33,7 +33,7 @@ import pytest
 from conftest import HDRI_NAMES
 from quadrature import random_directions
 
-from sh_lighting.blender.images import load_image_pixels
+from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.sun import detect_sun, remove_sun, sun_split_error
 

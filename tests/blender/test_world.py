@@ -1,4 +1,4 @@
-"""sh_lighting.blender.world / capture: the world's L_lm as Cycles renders it.
+"""sh_lighting.blender.world.reader / capture: the world's L_lm as Cycles renders it.
 
 The fast path (an Environment Texture's pixels projected by the core) is checked against the
 core on the same pixels, and against Cycles itself: ``capture_world`` renders the world into
@@ -18,10 +18,10 @@ import pytest
 from blender_files import write_exr
 
 from sh_lighting.blender import compat
-from sh_lighting.blender import world as world_module
-from sh_lighting.blender.capture import capture_world
-from sh_lighting.blender.images import image_pixels
-from sh_lighting.blender.world import WorldError, WorldInfo, world_coefficients
+from sh_lighting.blender.world import reader as world_module
+from sh_lighting.blender.world.capture import capture_world
+from sh_lighting.blender.world.images import image_pixels
+from sh_lighting.blender.world.reader import WorldError, WorldInfo, world_coefficients
 from sh_lighting.core.colour import srgb_to_linear
 from sh_lighting.core.equirect import texel_directions
 from sh_lighting.core.mirror_ball import mirror_ball_to_direction, project_mirror_ball

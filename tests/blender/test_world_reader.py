@@ -1,4 +1,4 @@
-"""sh_lighting.blender.world.read_world: what the world is, as the next render shows it.
+"""sh_lighting.blender.world.reader.read_world: what the world is, as the next render shows it.
 
 Animated worlds are checked against Cycles captures at two frames, with the scene's frame
 changed the way a script does it (``scene.frame_current = f``, no ``frame_set``), which
@@ -11,8 +11,8 @@ import pytest
 from blender_files import write_exr
 
 from sh_lighting.blender import compat
-from sh_lighting.blender.capture import capture_world
-from sh_lighting.blender.world import (
+from sh_lighting.blender.world.capture import capture_world
+from sh_lighting.blender.world.reader import (
     ImageSource,
     ProceduralSource,
     WorldError,
@@ -195,7 +195,9 @@ def test_window_costs_and_preset_metadata_follow_the_recorded_provenance(tmp_pat
     Strength changed (nothing is re-projected to find out). Preset metadata names the image,
     Mapping and Strength the values were computed from, not the world's current ones."""
     from sh_lighting import api
-    from sh_lighting.blender import design, preset_io, scene_data
+    from sh_lighting.blender.design import edits as design
+    from sh_lighting.blender.presets import files as preset_io
+    from sh_lighting.blender import scene_data
 
     world = image_world(tmp_path, smooth_pixels(16, 32), strength=2.0, rotation=(0.0, 0.0, 0.4))
     scene = bpy.context.scene

@@ -5,7 +5,7 @@ import pytest
 
 from sh_lighting.core.coefficients import FLOAT32_MAX, check_coefficients
 from sh_lighting.core.irradiance import irradiance
-from sh_lighting.core.presets import PresetError
+from sh_lighting.formats.presets import PresetError
 
 GOOD = np.arange(27, dtype=np.float64).reshape(9, 3) / 8.0  # exact in float32 too
 

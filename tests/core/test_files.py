@@ -10,8 +10,8 @@ import threading
 import numpy as np
 import pytest
 
-from sh_lighting.core import atomic
-from sh_lighting.core.presets import MAX_PRESET_BYTES, PresetError, read_preset, write_preset
+from sh_lighting.formats import atomic
+from sh_lighting.formats.presets import MAX_PRESET_BYTES, PresetError, read_preset, write_preset
 
 COEFFS = np.arange(27, dtype=np.float64).reshape(9, 3) / 8.0
 OTHER = COEFFS + 1.0

@@ -18,7 +18,7 @@ from sh_lighting.core.frames import (
     paper_to_blender,
     y_up_to_blender,
 )
-from sh_lighting.core.presets import read_preset
+from sh_lighting.formats.presets import read_preset
 from sh_lighting.core.rotation import sh_rotation_matrix
 
 ROUNDING = 1e-14  # a few ulps of values of order 1: what an exact formula leaves in float64

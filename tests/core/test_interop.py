@@ -14,7 +14,7 @@ import pytest
 from quadrature import random_directions
 
 from sh_lighting.core import irradiance, sh_basis, uv_to_direction
-from sh_lighting.core.interop import (
+from sh_lighting.formats.interop import (
     BLENDER_TO_BABYLON_LOOKUP,
     BLENDER_TO_CMGEN,
     coefficients_from_filament_prescaled,

@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sh_lighting.core import atomic, presets
+from sh_lighting.formats import atomic, presets
 from sh_lighting.core.coefficients import FLOAT32_MAX
-from sh_lighting.core.presets import (
+from sh_lighting.formats.presets import (
     PresetError,
     preset_from_dict,
     preset_from_json,

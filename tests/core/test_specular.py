@@ -11,9 +11,9 @@ from math import pi
 import numpy as np
 import pytest
 
-from sh_lighting.core import gltf_environment as env
+from sh_lighting.formats import gltf as env
 from sh_lighting.core.equirect import direction_to_texel, texel_directions, texel_solid_angles
-from sh_lighting.core.png import png_bytes
+from sh_lighting.formats.png import png_bytes
 from sh_lighting.core.specular import (
     bilinear_lookup,
     downsample,

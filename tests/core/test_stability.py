@@ -470,7 +470,7 @@ def eval_basis_sum(L, n):
     return e
 
 
-# The node group (sh_lighting/blender/nodes.py) computes each factor from n = (x, y, z) as below
+# The node group (sh_lighting/blender/shading/nodes.py) computes each factor from n = (x, y, z) as below
 # and sums the terms L_lm × factor in a chain of Multiply Add nodes whose order it chooses;
 # tests/blender/test_node_precision.py checks, node by node, that this is what it builds.
 NODE_ORDERS = {

@@ -16,7 +16,7 @@ from blender_files import write_constant_exr
 from farm_scene import ALBEDO, SIZE, SKY, WORLD, read_exr
 from numpy.testing import assert_allclose
 
-from sh_lighting.core.presets import read_preset
+from sh_lighting.formats.presets import read_preset
 
 ROOT = Path(__file__).resolve().parents[2]
 BUNDLES = ROOT / "farm" / "openjd"

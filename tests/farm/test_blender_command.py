@@ -18,7 +18,7 @@ from blender_files import write_constant_exr
 from numpy.testing import assert_allclose
 
 import sh_lighting
-from sh_lighting.core.presets import read_preset
+from sh_lighting.formats.presets import read_preset
 
 pytestmark = pytest.mark.blender
 

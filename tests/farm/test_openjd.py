@@ -29,7 +29,7 @@ from farm_jobs import (
 )
 from farm_scene import SKY_COEFFICIENTS, build_scene
 
-from sh_lighting.core.presets import write_preset
+from sh_lighting.formats.presets import write_preset
 
 pytestmark = [pytest.mark.blender, pytest.mark.slow]
 

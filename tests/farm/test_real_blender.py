@@ -29,7 +29,7 @@ from farm_jobs import (
     MAPS, ROOT, Job, check_frame, check_preset, error_lines, frame_names, tasks, write_maps,
 )
 
-from sh_lighting.core.presets import write_preset
+from sh_lighting.formats.presets import write_preset
 from tools import package
 
 CHROOT = Path(os.environ.get("BLENDER_GUI_ROOT", "/opt/blender-gui-root"))

@@ -46,7 +46,7 @@ def lighting(name):
         return np.random.default_rng(13).normal(size=(9, 3)), None
     else:
         from conftest import bundled_hdri_dir
-        from sh_lighting.blender.images import load_image_pixels
+        from sh_lighting.blender.world.images import load_image_pixels
 
         pixels = load_image_pixels(bundled_hdri_dir() / f"{name}.exr")[..., :3]
     return project_equirect(pixels), pixels

@@ -22,8 +22,8 @@ from lightings import (
     texel_map,
 )
 
-from sh_lighting.blender import preset_io
-from sh_lighting.core.gltf_environment import CUBE_SIZE, LEVELS, radiance_image
+from sh_lighting.blender.presets import files as preset_io
+from sh_lighting.formats.gltf import CUBE_SIZE, LEVELS, radiance_image
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.frames import BLENDER_TO_Y_UP
 

@@ -99,7 +99,7 @@ def test_compute_format_gltf_writes_an_environment_babylon_loads(run_node, tmp_p
     assert "private folder" not in text and str(tmp_path) not in text  # the file name only
     light = json.loads(text)["extensions"]["EXT_lights_image_based"]["lights"][0]
     assert light["extras"]["source"] == "texel.exr"
-    from sh_lighting.core.interop import from_gltf_irradiance_coefficients
+    from sh_lighting.formats.interop import from_gltf_irradiance_coefficients
     from sh_lighting.core.projection import project_equirect
 
     coeffs = project_equirect(texel_map()[0].astype(np.float32))

@@ -18,20 +18,21 @@ import bpy
 import numpy as np
 from mathutils import Matrix
 
-from ..core import edits, windowing
-from ..core.colour import luminance_weights
-from ..core.minimum import irradiance_minimum, negative_light_warning
-from ..core.rotation import rotate_coefficients
-from ..core.sh import spread_normals
-from ..core.sun import detect_sun, remove_sun
-from ..core.world_map import (
+from ...core import edits, windowing
+from ...core.colour import luminance_weights
+from ...core.minimum import irradiance_minimum, negative_light_warning
+from ...core.rotation import rotate_coefficients
+from ...core.sh import spread_normals
+from ...core.sun import detect_sun, remove_sun
+from ...core.world_map import (
     map_coefficients,
     map_irradiance,
     mapping_rotation,
     sun_light_rotation,
     to_world_direction,
 )
-from . import compat, scene_data, world
+from .. import compat, scene_data
+from ..world import reader as world
 
 SUN_NAME = "SH Sun"
 SUN_MARKER = "sh_lighting_sun"  # custom property on the Sun object Split Sun made

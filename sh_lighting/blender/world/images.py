@@ -29,8 +29,8 @@ import os
 import bpy
 import numpy as np
 
-from ..core.colour import BYTE_SPACES, byte_decoding, decode_bytes
-from .compat import working_space
+from ...core.colour import BYTE_SPACES, byte_decoding, decode_bytes
+from ..compat import working_space
 
 
 class DecodeError(ValueError):

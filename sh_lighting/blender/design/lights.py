@@ -26,9 +26,11 @@ import bpy
 import numpy as np
 from mathutils import Matrix
 
-from ..core import lights as core_lights
-from ..core.world_map import map_coefficients, sun_light_rotation, to_world_direction
-from . import design, scene_data, world
+from ...core import lights as core_lights
+from ...core.world_map import map_coefficients, sun_light_rotation, to_world_direction
+from .. import scene_data
+from ..world import reader as world
+from . import edits as design
 
 LIGHT_MARKER = "sh_lighting_light"
 LIGHT_NAME = "SH Light"

@@ -12,7 +12,8 @@ import os
 
 import bpy
 
-from . import preferences, properties, scene_data, world
+from .. import preferences, properties, scene_data
+from . import reader as world
 
 
 def world_provenance(info):

@@ -20,10 +20,14 @@ import textwrap
 
 import bpy
 
-from ..core.edits import describe_coefficients
-from ..core.minimum import negative_light_warning
-from ..core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
-from . import design, presets_ui, previews, scene_data, world
+from ...core.edits import describe_coefficients
+from ...core.minimum import negative_light_warning
+from ...core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
+from .. import scene_data
+from ..design import edits as design
+from ..world import reader as world
+from . import presets as presets_ui
+from . import previews
 
 CHANNELS = "RGB"
 # What each coefficient does, in a few characters (the full wording is in the tooltips).

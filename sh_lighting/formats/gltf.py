@@ -35,19 +35,19 @@ from math import log2
 
 import numpy as np
 
-from .equirect import check_pixels, texel_directions
-from .interop import BLENDER_TO_BABYLON_LOOKUP, to_gltf_irradiance_coefficients
-from .irradiance import check_coefficients
-from .png import png_bytes
-from .sh import sh_basis
-from .specular import (
+from ..core.equirect import check_pixels, texel_directions
+from ..core.irradiance import check_coefficients
+from ..core.sh import sh_basis
+from ..core.specular import (
     SOURCE_TEXELS_PER_TEXEL,
     bilinear_lookup,
     downsample,
     prefilter,
     scatter_average,
 )
-from .world_map import mapping_rotation
+from ..core.world_map import mapping_rotation
+from .interop import BLENDER_TO_BABYLON_LOOKUP, to_gltf_irradiance_coefficients
+from .png import png_bytes
 
 EXTENSION = "EXT_lights_image_based"
 CUBE_SIZE = 64  # S: the size of level 0

@@ -37,8 +37,9 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
-from ..core.presets import PresetError
-from . import preset_io, scene_data
+from ...formats.presets import PresetError
+from .. import scene_data
+from ..presets import files as preset_io
 from .polls import coefficients_poll, scene_poll
 
 LOAD = "shlight.load_preset"

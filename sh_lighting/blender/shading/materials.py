@@ -40,8 +40,9 @@ from typing import NamedTuple
 
 import bpy
 
-from . import compat, keep_bsdf
-from .diffuse_part import linked_socket, no_diffuse_reason, source_node
+from .. import compat
+from . import keep_bsdf
+from .diffuse_weight import linked_socket, no_diffuse_reason, source_node
 from .nodes import GROUP_NAME, ensure_node_group
 
 # Custom property of the added group node: JSON {"version": 2, "mode": ..., "outputs": [...],

@@ -33,9 +33,9 @@ from math import pi
 
 import bpy
 
-from ..core.irradiance import C1, C2, C3, C4, C5
-from ..core.sh import COEFFICIENT_NAMES
-from .scene_data import GAIN_NAMES, PROPERTY_NAMES
+from ...core.irradiance import C1, C2, C3, C4, C5
+from ...core.sh import COEFFICIENT_NAMES
+from ..scene_data import GAIN_NAMES, PROPERTY_NAMES
 
 GROUP_NAME = "SH Irradiance"
 # Custom property on the node group; its value is the layout version of the tree inside.

@@ -49,14 +49,14 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-from ..core import atomic
-from ..core.coefficients import check_coefficients
-from ..core.colour import REC709, convert_coefficients
-from ..core.gltf_environment import gltf_text
-from ..core.interop import to_filament_sh_txt, to_threejs_json
-from ..core.presets import PresetError, preset_to_json, read_preset
-from . import compat, scene_data
-from . import world as world_module
+from ...core.coefficients import check_coefficients
+from ...core.colour import REC709, convert_coefficients
+from ...formats import atomic
+from ...formats.gltf import gltf_text
+from ...formats.interop import to_filament_sh_txt, to_threejs_json
+from ...formats.presets import PresetError, preset_to_json, read_preset
+from .. import compat, scene_data
+from ..world import reader as world_module
 
 # format id -> (label, file extension)
 FORMATS = {
@@ -80,7 +80,7 @@ GENERATOR = "sh_lighting"
 EXPORT_SPACE = REC709
 OVERWRITE_HINT = "enable Overwrite (overwrite=True) to replace it"
 
-_PACKAGE_DIR = Path(__file__).resolve().parent.parent
+_PACKAGE_DIR = Path(__file__).resolve().parents[2]
 
 
 # --- folders -------------------------------------------------------------------------------

@@ -13,8 +13,12 @@ import math
 
 import bpy
 
-from ..core.minimum import negative_light_warning
-from . import design, lights_ui, panels, previews, scene_data, world
+from ...core.minimum import negative_light_warning
+from .. import scene_data
+from ..design import edits as design
+from ..world import reader as world
+from . import lights as lights_ui
+from . import panels, previews
 from .polls import NO_COEFFICIENTS, coefficients_poll, scene_poll
 
 BASIS_SCALE = 3.0  # largest icon size, in UI units; smaller when 5 do not fit the width

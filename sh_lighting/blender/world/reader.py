@@ -31,10 +31,10 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from ..core.mirror_ball import project_mirror_ball
-from ..core.projection import project_equirect
-from ..core.world_map import apply_mapping
-from . import compat
+from ...core.mirror_ball import project_mirror_ball
+from ...core.projection import project_equirect
+from ...core.world_map import apply_mapping
+from .. import compat
 from .capture import CaptureError, capture_world
 from .images import (
     DecodeError,

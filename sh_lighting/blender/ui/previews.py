@@ -18,7 +18,7 @@ import bpy
 import bpy.utils.previews
 import numpy as np
 
-from ..core.preview import basis_sphere_images, irradiance_sphere_image, linear_to_srgb
+from ...core.preview import basis_sphere_images, irradiance_sphere_image, linear_to_srgb
 
 BASIS_SIZE = 64
 IRRADIANCE_SIZE = 128

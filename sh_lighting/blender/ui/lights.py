@@ -2,8 +2,8 @@
 
 import bpy
 
-from ..core.lights import MAX_COUNT
-from . import lights
+from ...core.lights import MAX_COUNT
+from ..design import lights
 from .polls import scene_poll
 
 

@@ -10,7 +10,10 @@ import time
 
 import bpy
 
-from . import compute, lights, materials, scene_data
+from .. import scene_data
+from ..design import lights
+from ..shading import materials
+from ..world import compute
 from .polls import coefficients_poll, scene_poll
 
 

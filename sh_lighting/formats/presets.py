@@ -57,10 +57,9 @@ import stat
 from datetime import date, datetime
 from pathlib import Path
 
-
+from ..core.coefficients import check_coefficients, real_number
+from ..core.sh import COEFFICIENT_NAMES
 from .atomic import write_text_atomic
-from .coefficients import check_coefficients, real_number
-from .sh import COEFFICIENT_NAMES
 
 # A preset is about 1 KB; a file larger than this is not one (and is never read whole).
 MAX_PRESET_BYTES = 1 << 20

@@ -90,13 +90,13 @@ from math import pi
 
 import numpy as np
 
-from .frames import BLENDER_TO_Y_UP, change_frame
-from .irradiance import check_coefficients
-from .sh import (
+from ..core.frames import BLENDER_TO_Y_UP, change_frame
+from ..core.irradiance import check_coefficients
+from ..core.sh import (
     COEFFICIENT_NAMES,
+    Y00,
     Y1,
     Y2_XY,
-    Y00,
     Y20,
     Y22,
     band_of_each_coefficient,

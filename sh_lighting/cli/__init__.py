@@ -78,7 +78,7 @@ class CommandError(Exception):
 
 def _package_name():
     """Name of the package this module belongs to ("sh_lighting", "bl_ext.….sh_lighting")."""
-    return __package__ or __name__.rpartition(".")[0]
+    return (__package__ or __name__).rpartition(".")[0]
 
 
 def _module(name):
@@ -120,12 +120,12 @@ def hdri_coefficients(path, nonfinite="raise", keep_pixels=False):
 
     import numpy as np
 
-    from .core.coefficients import check_coefficients
-    from .core.equirect import NonFiniteError
-    from .core.irradiance import error_estimate
-    from .core.projection import project_equirect
+    from ..core.coefficients import check_coefficients
+    from ..core.equirect import NonFiniteError
+    from ..core.irradiance import error_estimate
+    from ..core.projection import project_equirect
 
-    images = _module("blender.images")
+    images = _module("blender.world.images")
     try:
         with library_output_captured():
             pixels = images.load_image_pixels(path)
@@ -219,7 +219,7 @@ def refuse_inputs(out, flag, inputs, advice="choose another name"):
 
 def check_new_file(path, overwrite, flag="--overwrite"):
     """Fail early, before any work, when ``path`` cannot be written as a new file."""
-    from .core.atomic import real_destination
+    from ..formats.atomic import real_destination
 
     path = Path(path)
     if path.is_dir():
@@ -235,7 +235,7 @@ def check_new_file(path, overwrite, flag="--overwrite"):
 
 def remove_own_leftovers(path):
     """Delete the temporary files a killed run left for the output ``path``; say so."""
-    from .core.atomic import real_destination, remove_leftovers
+    from ..formats.atomic import real_destination, remove_leftovers
 
     real = real_destination(path)
     for leftover in remove_leftovers(real.parent, real.name):
@@ -284,7 +284,7 @@ def save_blend(path, overwrite):
     """Save the open file as ``path`` atomically (a copy: the session keeps its file path)."""
     import bpy
 
-    from .core.atomic import atomic_destination
+    from ..formats.atomic import atomic_destination
 
     remove_own_leftovers(path)
     with atomic_destination(path, overwrite, suffix=".blend", what=".blend file",
@@ -297,9 +297,9 @@ def save_blend(path, overwrite):
 
 
 def cmd_compute(args):
-    from .core.sh import coefficient_table
+    from ..core.sh import coefficient_table
 
-    preset_io = _module("blender.preset_io")
+    preset_io = _module("blender.presets.files")
     is_blend = args.input is None or Path(args.input).suffix.lower() == ".blend"
     if args.input is not None:
         hint = "give a .blend file" if is_blend else "give an HDRI image or a .blend file"
@@ -360,11 +360,11 @@ def cmd_compute(args):
 
 def read_preset_argument(text, blend):
     """(path, coefficients) of the PRESET argument (``//`` relative to ``blend``)."""
-    from .core.presets import PresetError
+    from ..formats.presets import PresetError
 
     path = blend_relative(text, blend, "PRESET")
     try:
-        return path, _module("blender.preset_io").read_preset_file(path)[0]
+        return path, _module("blender.presets.files").read_preset_file(path)[0]
     except (PresetError, OSError) as error:
         raise CommandError(str(error)) from None
 
@@ -383,7 +383,7 @@ def objects_to_apply(scene, names):
 
 def cmd_apply(args):
     api = _module("api")
-    operators = _module("blender.operators")
+    operators = _module("blender.ui.operators")
     if args.blend is not None:
         blend = input_file(args.blend, ".blend file", "give the .blend file to change")
     else:
@@ -398,7 +398,7 @@ def cmd_apply(args):
     blend = open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
     scene = pick_scene(args.scene)
     objects = objects_to_apply(scene, args.objects)
-    preset_io = _module("blender.preset_io")
+    preset_io = _module("blender.presets.files")
     provenance = preset_io.preset_provenance(preset, {})
     api.set_coefficients(scene, preset_io.from_preset_space(coeffs), provenance)
     result = api.apply_to_materials(operators.materials_of(objects), scene, args.mode)
@@ -457,7 +457,7 @@ def render_frame(scene, output, frame, target, blend):
     """Render ``frame`` into ``target`` atomically; a CommandError if it cannot be written."""
     import bpy
 
-    from .core.atomic import atomic_destination
+    from ..formats.atomic import atomic_destination
 
     refuse_inputs(target, "--output", {".blend file": blend})
     try:
@@ -557,7 +557,7 @@ def batch_folders(args):
 
 def remove_batch_leftovers(out_dir):
     """Remove the temporary preset files a killed batch left in ``out_dir``; say so."""
-    from .core.atomic import leftovers
+    from ..formats.atomic import leftovers
 
     removed = []
     for path in leftovers(out_dir):
@@ -602,7 +602,7 @@ def batch_one(path, out, args, inputs):
     if out.exists() and not args.force:
         return "skipped"
     coeffs, metadata = hdri_coefficients(path, args.nonfinite)
-    _module("blender.preset_io").export_coefficients(coeffs, out, "sh_lighting", True, metadata)
+    _module("blender.presets.files").export_coefficients(coeffs, out, "sh_lighting", True, metadata)
     return "ok"
 
 
@@ -716,18 +716,18 @@ def extract_lights(source, scene, count, metadata, nonfinite="raise"):
     opened ``scene``; prints them, notes them in ``metadata``, returns the rest's (9, 3).
     ``nonfinite`` "zero": NaN/Inf texels of the HDRI count as black, as for the projection."""
     if scene is None:
-        from .core.lights import extract_lights as core_extract
-
         import numpy as np
 
-        pixels = _module("blender.images").load_image_pixels(source)
+        from ..core.lights import extract_lights as core_extract
+
+        pixels = _module("blender.world.images").load_image_pixels(source)
         if nonfinite == "zero":
             pixels = np.where(np.isfinite(pixels), pixels, 0.0).astype(np.float32)
         try:
             extraction = core_extract(pixels, count)
         except ValueError as error:
             raise CommandError(f"{source}: {error}") from None
-        from .core.projection import project_equirect
+        from ..core.projection import project_equirect
 
         coeffs = project_equirect(extraction.rest)
         found = [(light.direction, light.angular_diameter, light.colour, light.strength,
