@@ -35,3 +35,19 @@ def write_constant_exr(path, rgb, width=16, height=8):
 # script, and values standing for ones computed from the world (they become the Reset values).
 SCRIPT = {"source": "SCRIPT"}
 WORLD = {"source": "WORLD"}
+
+
+def write_png(path, values, alpha=None):
+    """Top-to-bottom 8-bit ``values`` (H, W, 3) as a PNG (RGBA when ``alpha`` is given)."""
+    height, width = values.shape[:2]
+    rgba = np.ones((height, width, 4), dtype=np.float32)
+    rgba[..., :3] = np.asarray(values) / 255.0
+    if alpha is not None:
+        rgba[..., 3] = np.asarray(alpha) / 255.0
+    image = bpy.data.images.new("tmp", width, height, alpha=alpha is not None)
+    image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())
+    image.filepath_raw = str(path)
+    image.file_format = "PNG"
+    image.save()
+    bpy.data.images.remove(image)
+    return str(path)

@@ -16,6 +16,7 @@ import bpy
 import mathutils
 import numpy as np
 import pytest
+from blender_files import write_png
 
 from sh_lighting.blender import compat
 from sh_lighting.blender.world.capture import capture_world
@@ -38,22 +39,6 @@ def set_working_space(name):
     if compat.working_space() != name:  # the operator cancels when nothing changes
         assert bpy.ops.wm.set_working_color_space(working_space=name) == {"FINISHED"}
     assert compat.working_space() == name
-
-
-def write_png(path, values, alpha=None):
-    """Top-to-bottom 8-bit ``values`` (H, W, 3) as a PNG (RGBA when ``alpha`` is given)."""
-    height, width = values.shape[:2]
-    rgba = np.ones((height, width, 4), dtype=np.float32)
-    rgba[..., :3] = np.asarray(values) / 255.0
-    if alpha is not None:
-        rgba[..., 3] = np.asarray(alpha) / 255.0
-    image = bpy.data.images.new("tmp", width, height, alpha=alpha is not None)
-    image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())
-    image.filepath_raw = str(path)
-    image.file_format = "PNG"
-    image.save()
-    bpy.data.images.remove(image)
-    return str(path)
 
 
 def image_world(image):
@@ -221,8 +206,8 @@ def test_exports_are_linear_rec709_and_presets_come_back(tmp_path, addon):
     """An ACEScg file exports what the same image gives in a Rec.709 file (in every format),
     and importing its preset gives back its ACEScg values."""
     from sh_lighting import api
-    from sh_lighting.blender.presets import files as preset_io
     from sh_lighting.blender import scene_data
+    from sh_lighting.blender.presets import files as preset_io
     from sh_lighting.formats.interop import to_threejs_sh
 
     rec709 = red_world_coefficients(tmp_path, "Linear Rec.709")
@@ -261,8 +246,8 @@ def test_compute_again_follows_a_switched_working_space(tmp_path):
 @needs_working_spaces
 def test_saturation_greys_with_the_working_spaces_luminance(addon):
     from sh_lighting import api
-    from sh_lighting.blender.design import edits as design
     from sh_lighting.blender import scene_data
+    from sh_lighting.blender.design import edits as design
 
     set_working_space("ACEScg")
     scene = bpy.context.scene

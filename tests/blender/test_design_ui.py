@@ -170,12 +170,17 @@ def test_split_sun_is_disabled_without_a_world(addon):
         bpy.ops.shlight.split_sun()
 
 
-def test_describe_and_warning_are_cores(addon):
+def test_describe_and_warning_read_the_lighting_with_its_gains(addon):
+    """The panel's words and warning are of the lighting that renders, L = s·c, not of the
+    channels alone: a gain the user dragged changes them."""
     scene = bpy.context.scene
     scene_data.store(scene, KNOWN, SCRIPT)
-    assert design.describe(scene) == edits.describe_coefficients(KNOWN)
-    assert design.negative_warning(scene) == negative_light_warning(KNOWN)
-    assert design.negative_warning(scene) is not None
+    scene[scene_data.GAIN_NAMES[2]] = -3.0  # L10 flipped and tripled
+    lit = KNOWN.copy()
+    lit[2] *= -3.0
+    assert design.describe(scene) == edits.describe_coefficients(lit)
+    assert design.describe(scene)[2] != edits.describe_coefficients(KNOWN)[2]
+    assert design.negative_warning(scene) == negative_light_warning(lit)
     scene_data.store(scene, windowing.minimal_nonnegative_window(KNOWN).coefficients, SCRIPT)
     assert design.negative_warning(scene) is None
 

@@ -24,7 +24,7 @@ from sh_lighting.blender.ui import panels, presets as presets_ui
 from sh_lighting.blender.presets import files as preset_io
 from sh_lighting.formats import atomic, interop
 from sh_lighting.formats.presets import PresetError, read_preset, write_preset
-from tools import package
+from tools import make_presets, package
 from ui_layout import RecordingLayout
 
 pytestmark = pytest.mark.blender
@@ -36,7 +36,9 @@ OTHER = np.linspace(-0.7, 2.3, 27).reshape(9, 3)
 # one scale per band: a few float64 roundings.
 ROUND_TRIP = 1e-13
 FORMATS = ("SH_LIGHTING", "THREEJS", "GLTF", "FILAMENT")
-SHIPPED = sorted(p.stem for p in (ROOT / "presets").glob("*.json"))
+# The presets tools/make_presets.py writes: the paper's three Figure 2 probes and the 8 HDRIs
+# inside bpy (its lists, not a glob of the folder the test then reads back).
+SHIPPED = sorted([*make_presets.FIGURE2_NAMES, *make_presets.HDRI_NAMES])
 
 
 def read_back(path, fmt):
@@ -273,9 +275,10 @@ def test_malformed_preset_is_an_error_and_changes_nothing(scene, tmp_path, case,
 
 def test_shipped_presets_are_listed_and_load(scene):
     shipped = preset_io.shipped_presets()
-    assert len(SHIPPED) >= 11
+    assert len(SHIPPED) == 11
+    assert sorted(p.stem for p in (ROOT / "presets").glob("*.json")) == SHIPPED  # all made
     assert list(shipped) == sorted(shipped, key=str.lower)
-    assert set(SHIPPED) <= set(shipped)
+    assert list(shipped) == sorted(SHIPPED, key=str.lower)
     path = shipped["forest"]
     assert bpy.ops.shlight.load_preset(filepath=str(path)) == {"FINISHED"}
     assert_array_equal(scene_data.get_coefficients(scene), read_preset(path)[0])

@@ -15,7 +15,8 @@ from types import SimpleNamespace
 import bpy
 import numpy as np
 import pytest
-from blender_files import write_exr
+from blender_files import write_exr, write_png
+from blender_scenes import add_mapping
 
 from sh_lighting.blender import compat
 from sh_lighting.blender.world import reader as world_module
@@ -50,22 +51,6 @@ def new_world(name):
 
 
 
-def write_png(path, values, alpha=None):
-    """Save top-to-bottom 8-bit ``values`` (H, W, 3) ints as a PNG (RGBA if ``alpha``)."""
-    height, width = values.shape[:2]
-    rgba = np.ones((height, width, 4), dtype=np.float32)
-    rgba[..., :3] = values / 255.0
-    if alpha is not None:
-        rgba[..., 3] = alpha / 255.0
-    image = bpy.data.images.new("tmp", width, height, alpha=alpha is not None)
-    image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())
-    image.filepath_raw = str(path)
-    image.file_format = "PNG"
-    image.save()
-    bpy.data.images.remove(image)
-    return str(path)
-
-
 def smooth_radiance(directions):
     """A positive, smooth RGB radiance with a soft bright spot: (..., 3) for (..., 3) directions."""
     x, y, z = directions[..., 0], directions[..., 1], directions[..., 2]
@@ -97,11 +82,7 @@ def environment_world(image, projection="EQUIRECTANGULAR", strength=1.0, rotatio
     texture.interpolation = interpolation
     tree.links.new(texture.outputs["Color"], background.inputs["Color"])
     if rotation is not None:
-        coordinates = tree.nodes.new("ShaderNodeTexCoord")
-        mapping = tree.nodes.new("ShaderNodeMapping")
-        mapping.inputs["Rotation"].default_value = rotation
-        tree.links.new(coordinates.outputs["Generated"], mapping.inputs["Vector"])
-        tree.links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
+        add_mapping(world, rotation)
     bpy.context.scene.world = world
     return world
 

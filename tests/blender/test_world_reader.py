@@ -9,6 +9,7 @@ import bpy
 import numpy as np
 import pytest
 from blender_files import write_exr
+from blender_scenes import add_mapping
 
 from sh_lighting.blender import compat
 from sh_lighting.blender.world.capture import capture_world
@@ -50,11 +51,7 @@ def image_world(tmp_path, pixels, strength=1.0, rotation=None):
     texture.image = bpy.data.images.load(write_exr(tmp_path / "world.exr", pixels))
     tree.links.new(texture.outputs["Color"], background.inputs["Color"])
     if rotation is not None:
-        coordinates = tree.nodes.new("ShaderNodeTexCoord")
-        mapping = tree.nodes.new("ShaderNodeMapping")
-        mapping.inputs["Rotation"].default_value = rotation
-        tree.links.new(coordinates.outputs["Generated"], mapping.inputs["Vector"])
-        tree.links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
+        add_mapping(world, rotation)
     bpy.context.scene.world = world
     return world
 
@@ -195,9 +192,9 @@ def test_window_costs_and_preset_metadata_follow_the_recorded_provenance(tmp_pat
     Strength changed (nothing is re-projected to find out). Preset metadata names the image,
     Mapping and Strength the values were computed from, not the world's current ones."""
     from sh_lighting import api
+    from sh_lighting.blender import scene_data
     from sh_lighting.blender.design import edits as design
     from sh_lighting.blender.presets import files as preset_io
-    from sh_lighting.blender import scene_data
 
     world = image_world(tmp_path, smooth_pixels(16, 32), strength=2.0, rotation=(0.0, 0.0, 0.4))
     scene = bpy.context.scene

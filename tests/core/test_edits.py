@@ -138,16 +138,28 @@ def test_band_gains():
     assert np.abs(diff[:, 0] - 2 * C2 * 2 * up[2, 0] * n[:, 2]).max() < EXACT
 
 
-def test_edits_compose():
-    a = saturation(exposure(rotate(COEFFS, yaw=0.4), 1.5), 0.3)
-    b = rotate(exposure(saturation(COEFFS, 0.3), 1.5), yaw=0.4)
-    assert np.abs(a - b).max() < EXACT  # all linear, and saturation commutes with rotation
-    c = flip_vertical(rotate(COEFFS, yaw=0.9))
-    d = rotate(flip_vertical(COEFFS), yaw=0.9)  # the mirror commutes with turns about z
-    assert np.abs(c - d).max() < EXACT
-    e = flip_vertical(rotate(COEFFS, pitch=0.3))
-    f = rotate(flip_vertical(COEFFS), pitch=-0.3)  # and reverses turns about x
-    assert np.abs(e - f).max() < EXACT
+def saturate_pixels(pixels, amount):
+    """Saturation done on the map itself: grey = luminance, chroma scaled by ``amount``."""
+    grey = (pixels @ LUMINANCE)[..., None]
+    return grey + amount * (pixels - grey)
+
+
+def test_composed_edits_equal_projecting_the_edited_map():
+    """Each chain of edits against the map edited texel by texel, then projected: a band-wise
+    slip in any edit (a wrong band, a sign, a gain on the wrong term) breaks the equality,
+    which checking that two orders of the same edits agree would not catch."""
+    k = 5
+    yaw = 2 * np.pi * k / W
+    a = saturation(exposure(rotate(COEFFS, yaw=yaw), 1.5), 0.3)
+    edited = saturate_pixels(2 ** 1.5 * np.roll(PIXELS, -k, axis=1), 0.3)
+    assert np.abs(a - project_equirect(edited)).max() < EXACT
+    c = flip_vertical(rotate(COEFFS, yaw=yaw))
+    assert np.abs(c - project_equirect(np.roll(PIXELS, -k, axis=1)[::-1])).max() < EXACT
+    # a turn that is not a texel shift: single lights, moved by the matrix, then mirrored in z
+    s = np.array([0.2, 0.7, -0.4])
+    r = yaw_pitch_roll_matrix(0.0, 0.3, 0.0)
+    mirrored = (r @ (s / np.linalg.norm(s))) * [1, 1, -1]
+    assert np.abs(flip_vertical(rotate(delta(s), pitch=0.3)) - delta(mirrored)).max() < EXACT
 
 
 def test_descriptions_of_known_lightings():

@@ -67,8 +67,3 @@ def test_filament_reads_and_shades_our_sh_txt(tmp_path, name, frame):
     d = float(np.abs(shown - ours).max() / np.abs(ours).max())
     print(f"Filament ({frame} frame) {name}: {d:.3g} of the peak")
     assert d <= TOLERANCE
-
-
-def test_the_reader_check_can_fail():
-    with pytest.raises(AssertionError, match="read 1 values"):
-        filament_reads("(1.0; 2.0, 3.0);\n")
