@@ -650,7 +650,7 @@ def write_report(path, cfg, quick, info, sweep, mips, approx, render, seconds):
     add("</details>\n")
 
     # paper comparisons
-    add("### Against the paper's error claims (§2 of REFERENCE.md)\n")
+    add("### Against the paper's error claims (§2 of docs/reference.md)\n")
     rows = []
     for n, r in approx["hdri"].items():
         p = r["methods"]["SH order 2"]

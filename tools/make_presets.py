@@ -3,8 +3,9 @@
 Usage: python -m tools.make_presets [--no-hdri]
 
 * The paper's Figure 2 probes (grace_cathedral, eucalyptus_grove, st_peters_basilica), read
-  from ../shared/data/figure2_coefficients.json and converted from the paper's y-up frame to
-  Blender's by an exact SH rotation (``frames.paper_to_blender``). Needs numpy only.
+  from tests/data/figure2_coefficients.json (the paper's table) and converted from the
+  paper's y-up frame to Blender's by an exact SH rotation (``frames.paper_to_blender``).
+  Needs numpy only.
 * The 8 HDRIs that ship with Blender (studiolights/world: city, courtyard, forest, interior,
   night, studio, sunrise, sunset), projected exactly with ``project_equirect``, each with its
   9-term error estimate against the exact irradiance (``reference_irradiance``) at 512 normals
@@ -26,7 +27,7 @@ from sh_lighting.formats.presets import write_preset
 
 ROOT = Path(__file__).resolve().parent.parent
 PRESETS = ROOT / "presets"
-FIGURE2 = ROOT.parent / "shared" / "data" / "figure2_coefficients.json"
+FIGURE2 = ROOT / "tests" / "data" / "figure2_coefficients.json"
 FIGURE2_NAMES = {
     "grace_cathedral": "Grace Cathedral",
     "eucalyptus_grove": "Eucalyptus Grove",

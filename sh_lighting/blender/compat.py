@@ -1,4 +1,4 @@
-"""The few places where Blender 4.2 LTS and 5.0 differ, in one module (REFERENCE.md §3b)."""
+"""The few places where Blender 4.2 LTS and 5.0 differ, in one module (docs/reference.md §3b)."""
 
 import math
 

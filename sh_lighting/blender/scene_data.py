@@ -1,6 +1,6 @@
 """Where a scene keeps its SH lighting, and ``store``: the one function that writes it.
 
-Plain custom properties, readable without the add-on (REFERENCE.md §3: an Attribute node of
+Plain custom properties, readable without the add-on (docs/reference.md §3: an Attribute node of
 type View Layer reads them at render time in any Blender, so a saved .blend renders the same
 on a render farm); all are keyframable and undoable like any property:
 

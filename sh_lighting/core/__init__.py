@@ -2,7 +2,7 @@
 
 Ramamoorthi and Hanrahan, "An Efficient Representation for Irradiance Environment Maps",
 SIGGRAPH 2001. Coefficients are raw radiance L_lm in Blender world axes (z up), shape
-((order+1)², 3), ordered by l(l+1)+m; see REFERENCE.md for every convention.
+((order+1)², 3), ordered by l(l+1)+m; see docs/reference.md for every convention.
 """
 
 from .equirect import direction_to_uv, texel_directions, texel_solid_angles, uv_to_direction

@@ -1,6 +1,6 @@
 """Blender's equirectangular (latitude-longitude) mapping and the exact geometry of its texels.
 
-Conventions (REFERENCE.md §3, checked against Cycles renders):
+Conventions (docs/reference.md §3, checked against Cycles renders):
 
 * a direction d = (x, y, z) in Blender world axes (z up) reads the image at
   u = 0.5 - atan2(y, x) / 2π (wrapped to [0, 1)) and v = 1 - acos(z) / π, with v measured from

@@ -1,6 +1,6 @@
 """Exact changes of axes for lighting coefficients: the paper's frame, Blender's, glTF's.
 
-Coefficients in this project are stored in Blender world axes (z up, REFERENCE.md §3). Other
+Coefficients in this project are stored in Blender world axes (z up, docs/reference.md §3). Other
 sources and targets use y-up frames; changing frames is a proper rotation of the directions,
 so the coefficients change by a real SH rotation, band by band (``rotation.sh_rotation_matrix``).
 It is not a relabelling: the l = 2 coefficients mix (L20 and L22 in particular).
@@ -10,7 +10,7 @@ coordinates in the other frame (or the reverse, as named). The lighting function
 not move: L_other(F ω) = L_blender(ω), i.e. the coefficients are those of the lighting rotated
 by F, ``rotate_coefficients(coeffs, F)``. Each band's energy Σ_m L_lm² is unchanged.
 
-* **The paper's probes** (Figure 2; REFERENCE.md §4): +y is up, so L1-1 is the vertical moment.
+* **The paper's probes** (Figure 2; docs/reference.md §4): +y is up, so L1-1 is the vertical moment.
   Brought to Blender by (x, y, z)_blender = (x, −z, y)_paper; afterwards L10 (Blender) equals
   L1-1 (paper).
 * **glTF, three.js, Filament (gltfio)**: right-handed, +y up. Blender's glTF exporter (with its
@@ -22,7 +22,7 @@ of 0, ±½, ±√3/2, ±1; the least-squares solution is snapped to those exact 
 checking it is within 1e-9 of them), so that e.g. the paper's L1-1 = 0.39 becomes Blender's
 L10 = 0.39 exactly, not 0.38999999999999996.
 
-The paper frame chosen in REFERENCE.md §4 is the glTF frame, so ``paper_to_blender`` and
+The paper frame chosen in docs/reference.md §4 is the glTF frame, so ``paper_to_blender`` and
 ``y_up_to_blender`` give the same numbers; they are kept apart because they say different
 things about where the data came from.
 """

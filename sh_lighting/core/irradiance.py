@@ -262,7 +262,7 @@ def error_over_power(estimate, reference, power):
     """|E − E_ref| / P per normal and channel: the paper's error measure.
 
     Ramamoorthi and Hanrahan (2001) give the 9-term irradiance error as a fraction of the total
-    light P = ∫ L dω (``total_power``; REFERENCE.md §2: at most 3/32 anywhere and 0.0307 on
+    light P = ∫ L dω (``total_power``; docs/reference.md §2: at most 3/32 anywhere and 0.0307 on
     average for non-negative lighting). ``estimate``, ``reference``: (N, 3) irradiance at the
     same normals; ``power``: (3,). A channel with P ≤ 0 is refused (ValueError).
     """

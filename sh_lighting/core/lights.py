@@ -1,7 +1,7 @@
 """Extracting lights from an HDRI: up to k compact bright sources as distant lights, 9 SH
 terms for the rest (generalising ``sun``'s single-sun split).
 
-Nine terms blur every small bright source into a broad lobe (REFERENCE.md §2); a sun, a
+Nine terms blur every small bright source into a broad lobe (docs/reference.md §2); a sun, a
 window or a softbox is better rendered as a real light (sharp falloff, shadows). The
 extraction is greedy: find the brightest compact source of what is left (``sun.detect_sun``:
 the region connected to the brightest texel above max(contrast × background, a fraction of

@@ -192,7 +192,7 @@ def direction_words(direction):
 def negative_light_warning(coeffs, tolerance=1e-6):
     """None if E(n) ≥ 0 for every normal and channel, else one short sentence for the user.
 
-    The 9-term irradiance goes negative behind a strong small light (REFERENCE.md §2: down to
+    The 9-term irradiance goes negative behind a strong small light (docs/reference.md §2: down to
     −0.0396 P for a single light) or after edits. Channels whose exact minimum is below
     −``tolerance`` × their mean irradiance (``mean_irradiance``) are named, with the minimum as
     a percentage of that mean and the direction of the most negative channel.

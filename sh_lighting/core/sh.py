@@ -1,6 +1,6 @@
 """Real spherical harmonics Y_lm in the paper's convention (Ramamoorthi and Hanrahan 2001, eq. 3).
 
-Conventions (REFERENCE.md §1):
+Conventions (docs/reference.md §1):
 
 * real SH without the Condon-Shortley phase, so Y_11 = +sqrt(3/4π) x;
 * coefficient index ``l*(l+1) + m``: Y00, Y1-1, Y10, Y11, Y2-2, ... ;
@@ -24,7 +24,7 @@ Y20 = 0.25 * sqrt(5.0 / pi)  # 0.315392: (3z² - 1)
 Y22 = 0.25 * sqrt(15.0 / pi)  # 0.546274: (x² - y²)
 
 COEFFICIENT_NAMES = ("L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22")
-# What each coefficient does, in Blender world axes (REFERENCE.md §1: Y1-1 ∝ y, Y10 ∝ z,
+# What each coefficient does, in Blender world axes (docs/reference.md §1: Y1-1 ∝ y, Y10 ∝ z,
 # Y11 ∝ x, Y2-2 ∝ xy, Y2-1 ∝ yz, Y20 ∝ 3z² - 1, Y21 ∝ xz, Y22 ∝ x² - y²): the one wording of
 # the nine terms (panel, tooltips, command line).
 COEFFICIENT_PHRASES = (

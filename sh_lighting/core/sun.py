@@ -1,6 +1,6 @@
 """Splitting the sun off an HDRI: a directional light for the sun, 9 SH terms for the rest.
 
-Nine terms blur a small, very bright source into a broad lobe and ring behind it (REFERENCE.md
+Nine terms blur a small, very bright source into a broad lobe and ring behind it (docs/reference.md
 §2); a real sun holds up to half of an outdoor map's power. Taking it out as a Blender Sun light
 and projecting only the rest keeps its sharp cosine falloff (and gives it shadows).
 

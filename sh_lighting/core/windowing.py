@@ -3,7 +3,7 @@
 A window is one factor w_l per band, applied as L'_lm = w_l L_lm (so E'_lm = w_l Â_l L_lm,
 eq. 7). Every window here has w_0 = 1 (the mean irradiance, c4 L00, is kept) and
 0 ≤ w_l ≤ 1. Truncating at l = 2 makes E(n) ring: behind a strong small light it goes negative
-(REFERENCE.md §2: down to −0.0396 P). Smoothing the higher bands trades sharpness for that.
+(docs/reference.md §2: down to −0.0396 P). Smoothing the higher bands trades sharpness for that.
 
 * ``hanning_window(width)``: w_l = (1 + cos(π l / width)) / 2 for l < width, 0 beyond. The
   common choice width = L + 1 = 3 gives (1, 3/4, 1/4); width = 2 gives (1, 1/2, 0), the
@@ -161,7 +161,7 @@ class WindowCost:
     """Errors of the 9-term irradiance against a reference, plain and windowed.
 
     Each entry is (3,) per channel, as a fraction of the channel's total power
-    P = ∫ L dω = 2√π L00 (the paper's measure, REFERENCE.md §2): mean and max of |E − E_ref|
+    P = ∫ L dω = 2√π L00 (the paper's measure, docs/reference.md §2): mean and max of |E − E_ref|
     over the given normals.
     """
 

@@ -1,7 +1,7 @@
 """An equirect world map as Blender shows it, and how to aim a Blender Sun light.
 
 Blender's world shader reads an Environment Texture through an optional Mapping node (Point,
-XYZ Euler rotation e) and scales it by the Background's Strength s (REFERENCE.md §3). With
+XYZ Euler rotation e) and scales it by the Background's Strength s (docs/reference.md §3). With
 R = ``euler_xyz_matrix(e)`` the Mapping node turns the *lookup* direction: the world shows, in
 direction d, the image's radiance at R d, times s:
 

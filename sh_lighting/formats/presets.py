@@ -15,7 +15,7 @@ Format (version 1)::
     }
 
 * ``coefficients``: raw radiance L_lm = ∫ L(ω) Y_lm(ω) dω (not pre-convolved, not
-  pre-scaled) in the paper's real SH basis (REFERENCE.md §1), linear RGB. Exactly the nine
+  pre-scaled) in the paper's real SH basis (docs/reference.md §1), linear RGB. Exactly the nine
   names above (the order of keys does not matter), each a list of 3 finite numbers.
 * ``frame``: always ``"blender_world_z_up"`` (Blender world axes, z up, so L10 is the up/down
   moment). Data in another frame is converted before it is written (``frames.py``); a file

@@ -1,6 +1,6 @@
 """The command line, each command run in its own process (``python -m sh_lighting ...``) on
 tiny inputs: a constant-colour EXR, whose exact coefficients are L00 = 2√π c and 0 for the
-rest (REFERENCE.md §2), and a .blend with a grey sphere lit by that EXR as its world.
+rest (docs/reference.md §2), and a .blend with a grey sphere lit by that EXR as its world.
 
 Under a constant sky of radiance c (strength 1) a Lambertian surface of albedo ρ shows ρ c,
 and the 9-term lighting is exact for it, so a render of the applied file shows 0.5 c on the

@@ -264,7 +264,7 @@ def test_minimal_window_makes_a_single_sun_world_non_negative_and_reports_costs(
     [(kind, message)] = reports
     assert kind == {"INFO"}
     assert message == expected
-    # the plain 9 terms of one small source: mean error near 3 % of its power (REFERENCE.md §2)
+    # the plain 9 terms of one small source: mean error near 3 % of its power (docs/reference.md §2)
     assert 0.02 < c.plain_mean.max() < 0.035
 
     # edited coefficients are not the world's: no costs, and the report says why

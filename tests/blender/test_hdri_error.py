@@ -1,7 +1,7 @@
 """The 9-term irradiance against brute force on the 8 HDRIs that ship inside bpy.
 
 Errors are given as a fraction of the total power P = ∫L dω (the paper's measure). Asserted:
-the universal bounds for any non-negative lighting (REFERENCE.md §2), max ≤ 3/32 and
+the universal bounds for any non-negative lighting (docs/reference.md §2), max ≤ 3/32 and
 mean ≤ 0.0307. Printed: the numbers, and whether each map meets the paper's claim for natural
 light probes (mean < 1 %, max < 5 %).
 """

@@ -1,7 +1,7 @@
 """Operators and the scripting API in background mode (no window, no UI context).
 
 Worlds are built from tiny float EXRs written to ``tmp_path``: a constant radiance c at
-strength s has the exact coefficients L00 = 2√π c s and L_lm = 0 otherwise (REFERENCE.md §2).
+strength s has the exact coefficients L00 = 2√π c s and L_lm = 0 otherwise (docs/reference.md §2).
 """
 
 import math

@@ -64,7 +64,7 @@ def test_rotation_composes_roll_then_pitch_then_yaw():
     assert np.abs(rotate(rotate(COEFFS, yaw=0.5), yaw=0.8) - rotate(COEFFS, yaw=1.3)).max() < EXACT
     back = rotate(rotate(rotate(COEFFS, 1.0, 0.5, -0.2), yaw=-1.0), pitch=-0.5)
     assert np.abs(rotate(back, roll=0.2) - COEFFS).max() < EXACT
-    # rotation keeps each band's energy Σ_m L_lm² (REFERENCE.md §4)
+    # rotation keeps each band's energy Σ_m L_lm² (docs/reference.md §4)
     turned = rotate(COEFFS, 0.4, 1.2, -2.2)
     for band in (slice(0, 1), slice(1, 4), slice(4, 9)):
         assert np.abs((turned[band] ** 2).sum(0) - (COEFFS[band] ** 2).sum(0)).max() < EXACT

@@ -23,13 +23,11 @@ from sh_lighting.core.rotation import sh_rotation_matrix
 
 ROUNDING = 1e-14  # a few ulps of values of order 1: what an exact formula leaves in float64
 REPO = Path(__file__).resolve().parents[2]
-FIGURE2 = Path(__file__).resolve().parents[3] / "shared" / "data" / "figure2_coefficients.json"
+FIGURE2 = REPO / "tests" / "data" / "figure2_coefficients.json"
 BANDS = (slice(0, 1), slice(1, 4), slice(4, 9))
 
 
 def figure2_probes():
-    if not FIGURE2.is_file():
-        pytest.skip(f"the paper's Figure 2 data is not at {FIGURE2}")
     return {k: np.array(v) for k, v in json.loads(FIGURE2.read_text())["probes"].items()}
 
 
@@ -37,9 +35,7 @@ def band_energies(c):
     return np.stack([(c[band] ** 2).sum(axis=0) for band in BANDS])
 
 
-def test_shared_data_path_resolves_next_to_the_repository():
-    # The Figure 2 tests below skip without the data: here its absence is a failure.
-    assert FIGURE2.is_file(), f"the paper's Figure 2 data is missing: {FIGURE2}"
+def test_figure2_data_is_in_the_repository():
     assert set(figure2_probes()) == {"grace_cathedral", "eucalyptus_grove", "st_peters_basilica"}
 
 

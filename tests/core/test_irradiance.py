@@ -25,7 +25,7 @@ EXACT = 1e-12
 
 
 def e9_single_source(u):
-    """REFERENCE.md §2: 9-term irradiance of a unit-power delta at cosine u."""
+    """docs/reference.md §2: 9-term irradiance of a unit-power delta at cosine u."""
     return 0.25 + u / 2.0 + (15.0 * u * u - 5.0) / 32.0
 
 
@@ -132,7 +132,7 @@ def test_reference_refuses_non_finite_pixels():
 
 
 def test_universal_error_bounds_on_random_non_negative_maps():
-    """|E9 - E| ≤ (3/32) P and E9 ≥ -0.0396 P for any non-negative lighting (REFERENCE.md §2).
+    """|E9 - E| ≤ (3/32) P and E9 ≥ -0.0396 P for any non-negative lighting (docs/reference.md §2).
 
     Each map has one texel holding most of the light, so the error comes near the bounds
     (a point source attains them; the reference integrates the sun's 2.8° texel exactly, an

@@ -1,6 +1,6 @@
 """Exact minimum/maximum of the 9-term irradiance on the sphere (minimum.py).
 
-Checked against closed forms (constant light, one delta: REFERENCE.md §2, the hard case),
+Checked against closed forms (constant light, one delta: docs/reference.md §2, the hard case),
 against every stationary point found independently from the 6th-degree secular polynomial,
 and against dense sampling refined by Riemannian Newton steps.
 """

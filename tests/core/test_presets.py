@@ -353,7 +353,8 @@ def test_shipped_presets_read_back_and_are_written_canonically(path):
 
 @pytest.mark.parametrize("name", HDRI_NAMES)
 def test_hdri_presets_carry_an_error_estimate_within_the_universal_bounds(name):
-    """REFERENCE.md §2: for non-negative lighting, max ≤ 3/32 and mean ≤ 0.0307 of the power."""
+    """For non-negative lighting, max ≤ 3/32 and mean ≤ 0.0307 of the power (docs/reference.md
+    §2)."""
     _, meta = read_preset(REPO / "presets" / f"{name}.json")
     estimate = meta["error_estimate"]
     assert 0.0 < estimate["mean"] <= estimate["max"] <= 3 / 32

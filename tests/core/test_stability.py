@@ -730,7 +730,7 @@ def e9_test_normals(pixels):
 @PROPERTIES
 @given(pixels=radiance_maps())
 def test_nine_term_irradiance_error_bounds(pixels):
-    """REFERENCE.md §2 for any non-negative lighting of power P: |E9 − E| ≤ (3/32) P and
+    """docs/reference.md §2 for any non-negative lighting of power P: |E9 − E| ≤ (3/32) P and
     E9 ≥ −(19/480) P (= −0.03958 P, E9's minimum at u = −8/15).
 
     E is the exact irradiance of the piecewise-constant map: reference_irradiance integrates

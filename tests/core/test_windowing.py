@@ -152,7 +152,7 @@ def test_nonpositive_l00_is_refused():
 
 def test_window_cost_for_one_light_matches_the_known_errors():
     """One unit-power delta: exact E = max(u, 0); the plain 9 terms err by 3/32 at the horizon
-    and by 0.0307 on average (REFERENCE.md §2); an identity window costs nothing.
+    and by 0.0307 on average (docs/reference.md §2); an identity window costs nothing.
     """
     s = np.array([0.0, 0.0, 1.0])
     normals = np.concatenate([random_directions(40000, seed=5), [[1.0, 0.0, 0.0]]])

@@ -11,7 +11,7 @@ and multiply them (L_lm = s_lm · c_lm), so
   bundled HDRIs, where no term can be left out, and stale renders whenever the values moved);
 * a material shared by two scenes shows each scene's own lighting, hence one group per file;
 * a saved .blend renders the same where this add-on is not installed (no Script/OSL node, no
-  registered property: plain custom properties, REFERENCE.md §3), in Cycles and EEVEE alike.
+  registered property: plain custom properties, docs/reference.md §3), in Cycles and EEVEE alike.
 
 E is the polynomial itself, not clamped at 0 (what the render shows is what is stored; the
 Design tools warn about and remove negative lighting).

@@ -3,7 +3,7 @@
 Used for worlds whose node trees the add-on cannot read directly (Sky Texture, gradients,
 mixes, unsupported mapping...): whatever the nodes do, the panorama is the radiance arriving
 at the origin from every direction, laid out in Blender's own equirectangular convention
-(REFERENCE.md §3: u = 0.5 − atan2(y, x)/2π, image centre facing +X, v from the bottom), so
+(docs/reference.md §3: u = 0.5 − atan2(y, x)/2π, image centre facing +X, v from the bottom), so
 ``sh_lighting.core.project_equirect`` takes it directly (rows are returned top to bottom).
 
 How, without touching the user's scene:
