@@ -8,9 +8,9 @@ step and shows what was measured. Pictures, Blender's log and ``results.json`` g
 
 Where it runs:
 
-* on this machine: ``../shared/tools/blender-gui-root run`` (Debian's Blender 4.3 in a root
-  of its own with Xvfb, xdotool and ImageMagick; needs root privileges and the root made by
-  ``blender-gui-root setup``, which ``.ci/run`` does when it is missing);
+* by default: ``tools/blender_gui_root.sh run`` (Debian's Blender in a Debian 13 root of its
+  own with Xvfb, xdotool and ImageMagick, at $BLENDER_GUI_ROOT, default /opt/blender-gui-root;
+  needs root privileges; the script builds the root on first use, about 2 minutes);
 * elsewhere: ``make test-gui BLENDER=/path/to/blender`` (4.2 or later) runs that Blender on a
   fresh Xvfb screen with throw-away user folders (your preferences and extensions are not
   touched); Xvfb, xdotool and ImageMagick's ``import`` must be on PATH.
@@ -31,13 +31,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "out" / "gui"
 SESSION = Path(__file__).with_name("session.py")
-# ../shared/tools/blender-gui-root beside the repository (or beside the folder of its git
-# worktrees); BLENDER_GUI_TOOL overrides.
-TOOL = Path(os.environ.get("BLENDER_GUI_TOOL") or next(
-    (p for p in (ROOT.parent / "shared" / "tools" / "blender-gui-root",
-                 ROOT.parent.parent / "shared" / "tools" / "blender-gui-root") if p.exists()),
-    ROOT.parent / "shared" / "tools" / "blender-gui-root"))
-GUI_ROOT = Path(os.environ.get("BLENDER_GUI_ROOT", "/opt/blender-gui-root"))
+TOOL = ROOT / "tools" / "blender_gui_root.sh"
 SCREEN = "1920x1200"
 TIMEOUT = 1800  # s: the whole session, Blender start and EEVEE shader compiles included (a loaded machine)
 
@@ -125,12 +119,9 @@ def _unavailable():
         if missing:
             return f"BLENDER={blender} needs {', '.join(missing)} on PATH"
         return None
-    if not TOOL.exists():
-        return f"{TOOL} not found: run `make test-gui BLENDER=/path/to/blender`"
     if os.geteuid() != 0:
-        return "blender-gui-root needs root privileges"
-    if not (GUI_ROOT / "usr" / "bin" / "blender").exists():
-        return f"no Blender GUI root at {GUI_ROOT}: run `{TOOL} setup` first"
+        return ("tools/blender_gui_root.sh needs root privileges: run as root, or "
+                "`make test-gui BLENDER=/path/to/blender`")
     return None
 
 
