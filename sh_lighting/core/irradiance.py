@@ -16,6 +16,7 @@ from math import pi, sqrt
 import numpy as np
 
 from .coefficients import check_coefficients as checked_coefficients
+from .downsample import block_downsample, whole_factor
 from .equirect import check_finite_pixels, check_pixels, column_centres
 from .sh import band_of_each_coefficient, lambert_band_factors, order_of, sh_basis, spread_normals
 from .texel_cosine import clamped_cosine_integral, texel_moments
@@ -39,6 +40,8 @@ TERM_PEAKS = np.array(
 CHUNK_VALUES = 1 << 22
 # Texel-normal pairs given to the exact kernel at a time (its temporaries: ~100 MB).
 KERNEL_PAIRS = 1 << 17
+# error_estimate's reference: maps wider than this are box-downsampled to about this width.
+ESTIMATE_WIDTH = 512
 
 
 def check_coefficients(coeffs):
@@ -280,21 +283,44 @@ def relative_error(estimate, reference, power):
     return float(err.mean(axis=0).max()), float(err.max())
 
 
-def error_estimate(pixels, coeffs, count=256):
-    """{"mean", "max"} 9-term irradiance error / total power ∫L dω of an equirect map, or
-    None (a channel without light).
+def error_estimate(pixels, coeffs, count=256, reference_width=ESTIMATE_WIDTH):
+    """{"mean", "max"} of ``bounded_error_estimate`` (the preset metadata's form), or None."""
+    estimate = bounded_error_estimate(pixels, coeffs, count, reference_width)
+    return None if estimate is None else {"mean": estimate["mean"], "max": estimate["max"]}
+
+
+def bounded_error_estimate(pixels, coeffs, count=256, reference_width=ESTIMATE_WIDTH):
+    """{"mean", "max", "bound", "reference_size"}: the 9-term irradiance error / total power
+    ∫L dω of an equirect map, or None (a channel without light).
 
     The paper's measure (``relative_error``): |E9 − E| at ``count`` normals
-    (``sh.spread_normals``) against the brute-force ``reference_irradiance`` (eq. 1) of
-    ``pixels``, divided per channel by the channel's power 2√π L00; mean is the worst
-    channel's mean, max the largest over normals and channels. The command line's and the
-    preset builder's estimate.
+    (``sh.spread_normals``) against the brute-force ``reference_irradiance`` (eq. 1), divided
+    per channel by the channel's power 2√π L00; mean is the worst channel's mean, max the
+    largest over normals and channels. The command line's and the preset builder's estimate.
+
+    Maps wider than ``reference_width`` take E from their box downsample by a whole factor
+    (``downsample.block_downsample``, about ``reference_width`` wide; the cost of the exact
+    reference grows with the width): E changes by at most Σ_B d_B Σ_t Ω_t |L_t − L̄_B| per
+    channel (``downsample`` module docstring), so "mean" and "max" are each within "bound" (that
+    over the power, the largest channel's; 0 at full resolution) of the full-resolution values.
+    "reference_size" is the (height, width) the reference was computed at.
     """
     power = total_power(coeffs)
     if not (power > 0.0).all():
         return None
+    a = check_pixels(pixels)
+    height, width = a.shape[:2]
+    factor = whole_factor(height, width, reference_width) if reference_width else 1
+    bound = 0.0
+    if factor > 1:
+        source, spread = block_downsample(a, factor, with_bound=True)
+        if not np.isfinite(source).all():
+            check_finite_pixels(a)  # names the texels; else the sums overflowed float64
+        bound = float((spread / power).max())
+    else:
+        source = a
     normals = spread_normals(count)
     mean, largest = relative_error(
-        irradiance(coeffs, normals), reference_irradiance(pixels, normals), power
+        irradiance(coeffs, normals), reference_irradiance(source, normals), power
     )
-    return {"mean": mean, "max": largest}
+    return {"mean": mean, "max": largest, "bound": bound, "reference_size": source.shape[:2]}

@@ -1,0 +1,77 @@
+"""Box downsampling of an equirectangular map by whole factors, in one float32 pass over it.
+
+Output texel (I, J) of a factor-k downsample is exactly the union of the k × k input texels
+(i, j) with i // k = I, j // k = J (the rows of both maps are uniform in θ, so their edges
+coincide), and holds their solid-angle-weighted mean L̄_B = Σ Ω_t L_t / Σ Ω_t: the map's power
+∫ L dω is unchanged, and so is every quantity linear in L whose kernel is constant on the blocks.
+
+For a kernel f(ω) that is 1-Lipschitz in angle (such as max(n·ω, 0) for a unit n, the integrand
+of eq. 1), the block's contribution changes by
+
+    Σ_t Ω_t L_t k_t − L̄_B Σ_t Ω_t k_t = Σ_t Ω_t (L_t − L̄_B)(k_t − k̄_B),
+
+k_t the mean of f over texel t, k̄_B its Ω-weighted mean over the block; |k_t − k̄_B| is at most
+the block's angular diameter d_B, so the change over the whole map is at most
+
+    Σ_B d_B Σ_(t in B) Ω_t |L_t − L̄_B|      (``variation_bound``, per channel),
+
+which ``block_downsample`` returns beside the map: zero for a map constant on its blocks, small
+wherever the map is smooth, and never below the true change (``irradiance.error_estimate``).
+"""
+
+from math import gcd, pi
+
+import numpy as np
+
+from .equirect import texel_solid_angles
+
+
+def whole_factor(height, width, target_width):
+    """The smallest k dividing both ``height`` and ``width`` with width / k ≤ ``target_width``,
+    or the largest common divisor if none is that large (1: the map is kept as it is)."""
+    common = gcd(height, width)
+    wanted = -(-width // max(1, target_width))
+    for k in range(max(1, wanted), common + 1):
+        if common % k == 0:
+            return k
+    return common
+
+
+def block_downsample(pixels, factor, with_bound=False):
+    """(map, bound): ``pixels`` (H, W, C ≥ 3; any strides) box-averaged by ``factor`` (dividing
+    H and W) with solid-angle weights, as float64 (H/k, W/k, 3); ``bound`` the (3,)
+    ``variation_bound`` of the module docstring (None unless ``with_bound``).
+
+    Works one block row (k input rows) at a time in float32, so it adds no copy of the image.
+    """
+    height, width = pixels.shape[:2]
+    channels = pixels.shape[2]
+    k = int(factor)
+    if k < 1 or height % k or width % k:
+        raise ValueError(f"a downsample factor must divide {height}x{width}, got {factor!r}")
+    out_h, out_w = height // k, width // k
+    solid = texel_solid_angles(height, width)
+    out = np.empty((out_h, out_w, 3))
+    bound = np.zeros(3) if with_bound else None
+    # angular diameter of a block row's blocks: Δθ + (widest sin θ) · min(Δφ, π)
+    edges = np.linspace(0.0, pi, out_h + 1)
+    widest = np.maximum(np.sin(edges[:-1]), np.sin(edges[1:]))
+    widest = np.where((edges[:-1] <= 0.5 * pi) & (edges[1:] >= 0.5 * pi), 1.0, widest)
+    diameter = np.minimum(pi, pi / out_h + widest * min(2.0 * pi * k / width, pi))
+    scratch = np.empty((k, width * channels), dtype=np.result_type(pixels.dtype, np.float32))
+    for i in range(out_h):
+        r0 = i * k
+        w = solid[r0 : r0 + k].astype(scratch.dtype)
+        flat = pixels[r0 : r0 + k].reshape(k, width * channels)
+        summed = (w @ flat).reshape(out_w, k, channels).sum(axis=1, dtype=np.float64)
+        mean = summed / (float(solid[r0 : r0 + k].sum(dtype=np.float64)) * k)  # (out_w, C)
+        out[i] = mean[:, :3]
+        if with_bound:
+            # Σ_t Ω_t |L_t − L̄_B| of each block: the block means repeated over their columns
+            spread_of = np.repeat(mean.astype(scratch.dtype), k, axis=0).reshape(-1)
+            np.subtract(flat, spread_of[None, :], out=scratch)
+            np.abs(scratch, out=scratch)
+            spread = (w @ scratch).reshape(out_w, k, channels)[..., :3].sum(axis=(0, 1),
+                                                                            dtype=np.float64)
+            bound += diameter[i] * spread
+    return out, bound
