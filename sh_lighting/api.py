@@ -55,10 +55,11 @@ from .blender.world import reader as _world
 from .formats.presets import PresetError
 
 WorldError = _world.WorldError
+AnimatedError = _scene_data.AnimatedError
 
 __all__ = [
     # computing, storing and applying the coefficients
-    "WorldError", "compute_from_world", "get_coefficients", "get_computed", "get_provenance",
+    "WorldError", "AnimatedError", "compute_from_world", "get_coefficients", "get_computed", "get_provenance",
     "set_coefficients",
     "reset", "ensure_node_group", "apply_to_materials", "remove_from_materials",
     # presets and interop
@@ -111,15 +112,19 @@ def get_computed(scene):
     return _scene_data.get_computed(scene)
 
 
-def set_coefficients(scene, coeffs, provenance=None):
+def set_coefficients(scene, coeffs, provenance=None, animation="KEY"):
     """Store (9, 3) L_lm on ``scene`` (a ValueError, nothing changed, if not finite 9×3):
     the RGB properties get ``coeffs``, the gains 1.
 
     ``provenance``: what to record about the values (default ``{"source": "SCRIPT"}``).
+    ``animation``: when a property written is keyframed or driven, "KEY" (default) keys the
+    new value at the current frame (a driven one is refused: ``AnimatedError`` naming it),
+    "CLEAR" removes its animation first, "REFUSE" raises ``AnimatedError``
+    (``blender.scene_data``); what was done: ``scene_data.last_note()``.
     The scene is tagged, so open viewports show the new values at once, and materials that
     SH Lighting was applied to follow at the next render. Returns the stored float64 copy.
     """
-    return _scene_data.store(scene, coeffs, provenance or {"source": "SCRIPT"})
+    return _scene_data.store(scene, coeffs, provenance or {"source": "SCRIPT"}, animation)
 
 
 def reset(scene):

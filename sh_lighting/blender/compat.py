@@ -67,6 +67,20 @@ def action_fcurves(datablock):
     return tuple(getattr(action, "fcurves", ()))
 
 
+def remove_fcurve(datablock, curve):
+    """Remove F-curve ``curve`` of the action assigned to ``datablock`` (``action_fcurves``):
+    from ``Action.fcurves`` (4.2) or from the assigned slot's channelbag (4.4+, 5.0)."""
+    action = datablock.animation_data.action
+    if hasattr(action, "layers"):
+        from bpy_extras import anim_utils
+
+        get = getattr(anim_utils, "animdata_get_channelbag_for_assigned_slot", None)
+        if get is not None:
+            get(datablock.animation_data).fcurves.remove(curve)
+            return
+    action.fcurves.remove(curve)
+
+
 def nla_fcurves(datablock):
     """F-curves of the actions in ``datablock``'s NLA strips (any slot), or ().
 

@@ -23,12 +23,33 @@ scene for the depsgraph and redraws the panels. Every writer of the coefficients
 A field edit or keyframe changes a property directly (Blender tags the scene itself); a
 Python script writing ``scene["sh_L10"] = ...`` must call ``scene.update_tag()`` afterwards
 for open viewports to see it (a render always reads the current values).
+
+Animated properties (issue 20 item 2). A value written over a keyframed or driven property
+is what Blender shows until the next frame change, when the animation overrides it: the
+write would be undone. So ``store`` looks at every property it writes and follows its
+``animation`` policy (``ANIMATION_POLICIES``) when one is animated (an F-curve of the
+scene's action or of its NLA strips, or a driver, on ``scene["sh_..."]``):
+
+* "KEY" (the default of the add-on and the API): the new value is also keyframed at the
+  current frame, so that it is what renders at that frame and the rest of the animation is
+  kept (Blender's auto-keying does the same). A driven property cannot be keyed (the driver
+  overrides any key): refused, naming the property and its driver;
+* "CLEAR": the property's F-curves and drivers are removed first (the user's consent: the
+  command line's ``--animation clear``), so the value renders at every frame;
+* "REFUSE" (the command line's default): an ``AnimatedError`` naming the property, nothing
+  changed.
+
+``last_note()`` says what the last ``store`` did about animation ("keyed at frame 12
+because sh_L10_gain is animated"), for the operators' reports. ``store(..., gains="KEEP")``
+(the design edits, when a gain is animated) writes the channels c only and leaves the gains
+and their animation alone: L = s(t) · c' at every frame.
 """
 
 import bpy
 import numpy as np
 
 from ..core.coefficients import check_coefficients
+from . import compat
 from ..core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
 
 # Attribute/custom-property names: "L1-1" -> "sh_L1m1" (no '-' inside an attribute name).
@@ -45,6 +66,15 @@ SOFT_RANGE = 2.0
 SOFT_FLOOR = 1e-3
 GAIN_SOFT_MIN, GAIN_SOFT_MAX = -2.0, 4.0
 PRECISION = 4
+ANIMATION_POLICIES = ("KEY", "CLEAR", "REFUSE")
+DEFAULT_ANIMATION = "KEY"
+GAIN_POLICIES = ("UNIT", "KEEP")
+
+_last_note = ""
+
+
+class AnimatedError(ValueError):
+    """A property ``store`` would write is animated and the policy forbids writing over it."""
 
 
 def has_coefficients(scene):
@@ -65,9 +95,13 @@ def get_coefficients(scene):
             f"scene '{scene.name}' has no SH lighting coefficients yet ({', '.join(missing)} "
             "missing): run Compute from World or set them first"
         )
-    c = np.array([list(scene[name]) for name in PROPERTY_NAMES], dtype=np.float64)
     s = np.array([gain(scene, index) for index in range(9)])
-    return c * s[:, None]
+    return get_channels(scene) * s[:, None]
+
+
+def get_channels(scene):
+    """The scene's (9, 3) float64 channels c_lm, without the gains (a KeyError if unset)."""
+    return np.array([list(scene[name]) for name in PROPERTY_NAMES], dtype=np.float64)
 
 
 def validate(coeffs):
@@ -89,20 +123,131 @@ def _check_provenance(provenance):
     return dict(provenance)
 
 
-def store(scene, coeffs, provenance):
+def _path(name):
+    return f'["{name}"]'
+
+
+def animation_of(scene, name):
+    """How custom property ``name`` of ``scene`` is animated: "driven", "keyframed" or None."""
+    animation = getattr(scene, "animation_data", None)
+    if animation is None:
+        return None
+    path = _path(name)
+    if any(curve.data_path == path for curve in animation.drivers):
+        return "driven"
+    curves = compat.action_fcurves(scene) + compat.nla_fcurves(scene)
+    if any(curve.data_path == path for curve in curves):
+        return "keyframed"
+    return None
+
+
+def animated(scene, names=None):
+    """{name: "driven" | "keyframed"} of the coefficient and gain properties (or ``names``)
+    that are animated on ``scene``."""
+    found = {}
+    for name in names if names is not None else PROPERTY_NAMES + GAIN_NAMES:
+        how = animation_of(scene, name)
+        if how is not None:
+            found[name] = how
+    return found
+
+
+def gains_animated(scene):
+    """True when any gain s_lm of ``scene`` is keyframed or driven."""
+    return bool(animated(scene, GAIN_NAMES))
+
+
+def _clear_animation(scene, names):
+    """Remove the F-curves (of the scene's own action) and drivers of ``names``; only those."""
+    animation = scene.animation_data
+    paths = {_path(name) for name in names}
+    for curve in [c for c in animation.drivers if c.data_path in paths]:
+        animation.drivers.remove(curve)
+    for curve in [c for c in compat.action_fcurves(scene) if c.data_path in paths]:
+        compat.remove_fcurve(scene, curve)
+    left = animated(scene, names)
+    if left:  # an NLA strip's action (shared, maybe by other scenes): not ours to edit
+        raise AnimatedError(
+            f"{_listed(left)} animated by an NLA strip: nothing stored; remove the strip "
+            "or mute it, then try again"
+        )
+
+
+def _listed(found):
+    names = sorted(found)
+    return f"{', '.join(names)} {'is' if len(names) == 1 else 'are'}"
+
+
+def _check_animation(scene, names, animation):
+    """The animated ones of ``names`` that ``store`` may write under policy ``animation``
+    ({name: how}), or an AnimatedError saying which property and what to do."""
+    if animation not in ANIMATION_POLICIES:
+        raise ValueError(
+            f"animation must be one of {', '.join(ANIMATION_POLICIES)}, got {animation!r}"
+        )
+    found = animated(scene, names)
+    if not found or animation == "CLEAR":
+        return found
+    if animation == "REFUSE":
+        raise AnimatedError(
+            f"{_listed(found)} animated ({', '.join(sorted(set(found.values())))}), so a "
+            "value written now would be undone at the next frame: nothing stored; key the "
+            "new values at this frame (animation='KEY', --animation key) or remove the "
+            "animation (animation='CLEAR', --animation clear)"
+        )
+    driven = {name: how for name, how in found.items() if how == "driven"}
+    if driven:
+        raise AnimatedError(
+            f"{_listed(driven)} driven by a driver, which overrides any value or key: "
+            "nothing stored; remove the driver (Clear Driver on the field, or "
+            "animation='CLEAR', --animation clear), then try again"
+        )
+    return found
+
+
+def last_note():
+    """What the last ``store`` did about animated properties, a sentence ("" if nothing)."""
+    return _last_note
+
+
+def forget_note():
+    """Clear ``last_note`` (before a writer that may not store at all)."""
+    global _last_note
+    _last_note = ""
+
+
+def store(scene, coeffs, provenance, animation=DEFAULT_ANIMATION, gains="UNIT"):
     """Write (9, 3) L_lm on ``scene`` as c = ``coeffs``, s = 1: the one write of coefficients.
 
     ``provenance``: a dict with "source" (``SOURCES``) and what the writer knows of it; a
     "WORLD" record without "edit" (values as computed) also makes them the Reset values.
-    Validates first (ValueError, nothing changed), then writes, records, sets the UI data,
-    tags the scene for the depsgraph (the viewports and the next render see the new values)
-    and redraws the panels. Returns the stored float64 copy.
+    ``animation``: what to do when a written property is animated (``ANIMATION_POLICIES``,
+    module docstring). ``gains``: "UNIT" writes s = 1; "KEEP" writes the channels c only
+    (``coeffs`` are then c, the lighting s · c). Validates first (ValueError, nothing
+    changed), then writes, keys or clears, records, sets the UI data, tags the scene for the
+    depsgraph (the viewports and the next render see the new values) and redraws the panels.
+    Returns the stored float64 copy.
     """
+    global _last_note
     c = validate(coeffs)
     record = _check_provenance(provenance)
+    if gains not in GAIN_POLICIES:
+        raise ValueError(f"gains must be one of {', '.join(GAIN_POLICIES)}, got {gains!r}")
+    written = PROPERTY_NAMES + (GAIN_NAMES if gains == "UNIT" else ())
+    found = _check_animation(scene, written, animation)
+    _last_note = ""
+    if found and animation == "CLEAR":
+        _clear_animation(scene, found)
+        _last_note = f"animation of {', '.join(sorted(found))} removed"
     for name, gain_name, rgb in zip(PROPERTY_NAMES, GAIN_NAMES, c):
         scene[name] = [float(v) for v in rgb]
-        scene[gain_name] = 1.0
+        if gains == "UNIT":
+            scene[gain_name] = 1.0
+    if found and animation == "KEY":
+        frame = scene.frame_current
+        for name in found:
+            scene.keyframe_insert(_path(name), frame=frame)
+        _last_note = f"keyed at frame {frame} because {_listed(found)} animated"
     if record["source"] == "WORLD" and "edit" not in record:
         scene[COMPUTED_PROPERTY] = [float(v) for v in c.ravel()]
         scene[COMPUTED_PROVENANCE_PROPERTY] = record
@@ -110,7 +255,7 @@ def store(scene, coeffs, provenance):
     ensure_ui(scene)
     scene.update_tag()
     redraw()
-    return c
+    return c if gains == "UNIT" else get_coefficients(scene)
 
 
 def reset(scene):

@@ -28,9 +28,11 @@ inputs, and a path starting with ``//`` is relative to the .blend's folder, as i
   estimate) or a file for three.js, glTF (a .gltf environment with a specular cube from the
   image) or Filament.
 * ``apply PRESET [BLEND] (--out NEW.blend | --in-place) [--objects NAME ...] [--overwrite]
-  [--mode KEEP_BSDF|EMISSION]``: sets the coefficients and applies the SH node group to the
-  materials of all (or the named) objects of the scene (keeping their BSDF, or as emission
-  only), then saves. An output is required: ``--out`` (refused if it exists,
+  [--mode KEEP_BSDF|EMISSION] [--animation refuse|key|clear]``: sets the coefficients and
+  applies the SH node group to the materials of all (or the named) objects of the scene
+  (keeping their BSDF, or as emission only), then saves. Keyframed or driven coefficients
+  or gains are refused by default (they would undo the preset at the next frame): ``key``
+  keys the preset at the current frame, ``clear`` removes their animation. An output is required: ``--out`` (refused if it exists,
   unless ``--overwrite``; never the input itself) or ``--in-place`` (replaces the input).
 * ``render [BLEND] --output PATH [--frame N | --frames A B | --frames A-B] [--engine E]
   [--samples N] [--skip-existing]``: renders frames headless; PATH follows Blender's ``-o``
@@ -400,7 +402,15 @@ def cmd_apply(args):
     objects = objects_to_apply(scene, args.objects)
     preset_io = _module("blender.presets.files")
     provenance = preset_io.preset_provenance(preset, {})
-    api.set_coefficients(scene, preset_io.from_preset_space(coeffs), provenance)
+    try:
+        api.set_coefficients(scene, preset_io.from_preset_space(coeffs), provenance,
+                             args.animation.upper())
+    except api.AnimatedError as error:
+        raise CommandError(str(error).replace("(animation='KEY', ", "(")
+                           .replace("(animation='CLEAR', ", "(")) from None
+    note = _module("blender.scene_data").last_note()
+    if note:
+        _print(f"SH lighting {note}")
     result = api.apply_to_materials(operators.materials_of(objects), scene, args.mode)
     for name, reason in result.skipped:
         _print(f"skipped material '{name}': {reason}")
@@ -829,6 +839,12 @@ def build_parser(prog=PROG):
                    help="only the materials of these objects (default: every object)")
     p.add_argument("--scene", metavar="NAME", help="scene to change (default: active)")
     _add_mode_option(p)
+    p.add_argument(
+        "--animation", choices=("refuse", "key", "clear"), default="refuse",
+        help="when the scene's sh_L.. coefficients or gains are keyframed or driven: refuse "
+        "(default, nothing saved), key the preset's values at the scene's current frame "
+        "(the rest of the animation kept; a driven one is refused), or clear their "
+        "animation so that the preset renders at every frame")
     p.set_defaults(run=cmd_apply)
 
     p = commands.add_parser(

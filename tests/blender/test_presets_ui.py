@@ -488,3 +488,13 @@ def test_file_browser_gives_the_format_its_extension(fmt, given, expected):
     changed = presets_ui.SHLIGHT_OT_export_preset.check(fake, None)
     assert fake.filepath == expected
     assert changed == (given != expected)
+
+
+def test_a_loaded_preset_is_reported_by_the_name_the_menu_shows(scene):
+    """Issue 23 item 10: "Grace Cathedral", not the file stem "grace_cathedral"."""
+    from blender_scenes import run_execute
+
+    path = preset_io.shipped_presets()["grace_cathedral"]
+    result, reports = run_execute(presets_ui.SHLIGHT_OT_load_preset, filepath=str(path))
+    assert result == {"FINISHED"}
+    assert reports == [({"INFO"}, "Loaded SH lighting preset 'Grace Cathedral'")]

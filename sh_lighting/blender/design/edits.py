@@ -51,10 +51,26 @@ class DesignError(ValueError):
 # -- the scene's coefficients ------------------------------------------------------------------
 
 
+def _edited_values(scene):
+    """(values an edit works on, ``store``'s gains policy). While a gain s_lm is keyframed or
+    driven, the channels c_lm alone (the gains and their animation stay: L = s(t) · c' at
+    every frame; folding an animated gain into c would apply it twice at the next frame,
+    issue 23 item 2); else the lighting L = s · c, stored with s = 1. Exposure, saturation,
+    band gains, the flip and the windows scale whole rows, so they commute with the gains;
+    a rotation mixes the rows of a band, so with unequal animated gains in a band the gains
+    then scale the rotated rows."""
+    if scene_data.gains_animated(scene):
+        scene_data.get_coefficients(scene)  # the LookupError when there are none
+        return scene_data.get_channels(scene), "KEEP"
+    return scene_data.get_coefficients(scene), "UNIT"
+
+
 def _edit(scene, function, *args, **kwargs):
-    coeffs = scene_data.get_coefficients(scene)
-    edited = function(coeffs, *args, **kwargs)
-    return scene_data.store(scene, edited, scene_data.edited(scene, function.__name__))
+    values, gains = _edited_values(scene)
+    edited = function(values, *args, **kwargs)
+    return scene_data.store(
+        scene, edited, scene_data.edited(scene, function.__name__), gains=gains
+    )
 
 
 def rotate(scene, yaw=0.0, pitch=0.0, roll=0.0):
@@ -135,15 +151,17 @@ def match_mapping(scene):
     afterwards they are what Compute from World gives with it. DesignError when the world
     has no Mapping rotation that SH Lighting reads.
     """
-    coeffs = scene_data.get_coefficients(scene)
+    values, gains = _edited_values(scene)
     image = _world_image(scene, "Match Mapping", equirect=False)
     if image.rotation is None:
         raise DesignError(
             f"world '{image.world}' has no Mapping node between Texture Coordinate and its "
             "Environment Texture: there is no rotation to match"
         )
-    rotated = rotate_coefficients(coeffs, mapping_rotation(image.rotation))
-    return scene_data.store(scene, rotated, scene_data.edited(scene, "match_mapping"))
+    rotated = rotate_coefficients(values, mapping_rotation(image.rotation))
+    return scene_data.store(
+        scene, rotated, scene_data.edited(scene, "match_mapping"), gains=gains
+    )
 
 
 # -- windows -----------------------------------------------------------------------------------
@@ -260,11 +278,13 @@ def apply_window(scene, kind, width=DEFAULT_WIDTH):
     an equirect world image, it holds the error each window costs against that image's
     brute-force irradiance at ``COST_NORMALS`` normals.
     """
-    coeffs = scene_data.get_coefficients(scene)
+    coeffs = scene_data.get_coefficients(scene)  # the window is chosen for the lighting
     window = window_for(kind, coeffs, width)
     costs, note = _world_costs(scene, coeffs, kind, window, width)
+    values, gains = _edited_values(scene)  # band factors commute with the gains
     stored = scene_data.store(
-        scene, windowing.apply_window(coeffs, window), scene_data.edited(scene, f"{kind} window")
+        scene, windowing.apply_window(values, window),
+        scene_data.edited(scene, f"{kind} window"), gains=gains,
     )
     return WindowResult(kind, window, stored, costs, note)
 

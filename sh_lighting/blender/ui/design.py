@@ -34,11 +34,14 @@ class _Edit:
         return coefficients_poll(cls, context)
 
     def execute(self, context):
+        scene_data.forget_note()
         try:
             message = self.apply(context.scene)
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
+        note = scene_data.last_note()  # a key written over an animated value, if any
+        message = "; ".join(part for part in (message, note and f"SH lighting {note}") if part)
         if message:
             self.report({"INFO"}, message)
         return {"FINISHED"}

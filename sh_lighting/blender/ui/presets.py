@@ -91,9 +91,23 @@ def load_preset_file(operator, scene, path):
     except (PresetError, OSError, ValueError) as error:
         operator.report({"ERROR"}, f"Preset not loaded, nothing changed: {error}")
         return {"CANCELLED"}
-    name = os.path.splitext(os.path.basename(path))[0]
-    operator.report({"INFO"}, f"Loaded SH lighting preset '{name}'")
+    note = scene_data.last_note()
+    operator.report({"INFO"}, f"Loaded SH lighting preset '{loaded_name(path)}'"
+                    + (f"; {note}" if note else ""))
     return {"FINISHED"}
+
+
+def loaded_name(path):
+    """The name the preset menu shows for the preset file at ``path`` (issue 23 item 10):
+    "Grace Cathedral" for the shipped ``grace_cathedral.json``, a user preset's file stem as
+    it is."""
+    path = Path(path)
+    shipped_dir = preset_io.shipped_preset_dir()
+    try:
+        shipped = shipped_dir is not None and path.resolve().parent == shipped_dir.resolve()
+    except OSError:
+        shipped = False
+    return display_name(path.stem, shipped)
 
 
 class SHLIGHT_OT_load_preset(bpy.types.Operator):
@@ -375,12 +389,9 @@ def menu_label(scene):
     path = record.get("path")
     if record.get("source") != "PRESET" or "edit" in record or not path:
         return PRESETS_LABEL
-    path = Path(path)
-    if not path.is_file():
+    if not Path(path).is_file():
         return PRESETS_LABEL
-    shipped_dir = preset_io.shipped_preset_dir()
-    shipped = shipped_dir is not None and path.parent == shipped_dir.resolve()
-    return display_name(path.stem, shipped)
+    return loaded_name(path)
 
 
 class SHLIGHT_PT_presets(bpy.types.Panel):
