@@ -1,0 +1,350 @@
+"""Lighting from a photo of a grey (diffuse) ball: the nine L_lm by linear least squares.
+
+A Lambertian ball of albedo ρ shows the radiance ρ E(n) / π at normal n (eq. 1), and the
+9-term irradiance E(n) = Σ Â_l L_lm Y_lm(n) (eq. 6-7, the quadratic polynomial of eq. 13) is
+linear in the nine L_lm: each pixel inside the ball's circle is one linear equation, per
+colour channel. Normals come from ``ball_camera.ball_normals`` (orthographic or perspective).
+
+What a single photo cannot give: only the normals facing the camera are seen. A quadratic on
+the sphere is fixed by any open patch, but extrapolating it from a hemisphere (less a rim
+margin) is badly conditioned: the unseen side can be far off and negative. The unseen side is
+therefore filled by a *prior* the user chooses, added as pseudo-observations on unseen normals
+(``sh.spread_normals`` farther than 1.5 lattice spacings from every seen normal) with a total
+weight of at most ``prior_weight`` × the pixels', halved until the prior moves the seen
+picture by at most ``PRIOR_HEADROOM`` × the residual (so the prior decides only what the
+photo leaves open; the weight used is reported):
+
+* "mirror": the seen side mirrored through the plane perpendicular to the view axis (the
+  value at n is the plain fit's at n − 2 (n·w) w, w towards the camera; where that mirror
+  image is unseen too, the seen side's mean);
+* "ambient": the seen side's mean irradiance, a constant;
+* "none": no prior (the plain least-squares fit).
+
+Then the fit is kept from negative light: while the exact minimum of E over the sphere
+(``minimum.irradiance_minimum``) is below 0 in a channel, a strong observation E = 0 at that
+minimum's normal is added and the channel refitted (at most ``NEGATIVE_STEPS`` times), and
+what is left below 0 is lifted by a constant (L00 + deficit / c4);
+``negative_light_warning`` of the result is reported (None when it never goes negative).
+
+The report (``PhotoFit``) gives: the residual (RMS of the used pixels against the best
+nine-term picture, the plain fit, relative to their mean: a few % for a matte ball; large
+when the ball is not diffuse, the circle is off or the photo is clipped), the condition number
+of the fit (of the column-equilibrated design matrix), the terms the photo constrains poorly
+(singular vectors with σ/σ_max < ``WEAK_SINGULAR``, by name), pixels used, clipped and
+non-finite pixels left out.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .ball_camera import PhotoCamera, PhotoError, ball_normals, check_circle
+from .irradiance import C4, irradiance
+from .minimum import irradiance_minimum, mean_irradiance, negative_light_warning
+from .sh import COEFFICIENT_NAMES, band_of_each_coefficient, lambert_band_factors, sh_basis
+from .sh import spread_normals
+
+PRIORS = ("mirror", "ambient", "none")
+DEFAULT_ALBEDO = 0.18
+DEFAULT_MARGIN = 0.05  # of the radius: the rim pixels mix ball and background
+DEFAULT_PRIOR_WEIGHT = 1.0  # the most: as much as all the pixels together
+MIN_RADIUS = 4.0  # pixels: below it the ball has too few pixels for nine terms
+MIN_PIXELS = 30  # used pixels: a few per unknown
+# A matte ball's picture is within a few % of the best nine-term picture (3.1 % under a
+# sunlit window probe, measured in the issue); above this, it is not a diffuse ball's.
+MAX_RESIDUAL = 0.1
+# ... and the nine terms explain less than half of how the pixels vary: a ball under a single
+# hard sun has a larger residual (38 % of its mean, the terminator) but the nine terms
+# explain 90 % of its variation; noise or a background explains almost nothing.
+MAX_UNEXPLAINED = 0.5
+WEAK_SINGULAR = 0.1  # σ / σ_max below which a direction of the nine terms is poorly fixed
+WEAK_LOADING = 0.3  # |component| of such a singular vector that names a term
+PRIOR_NORMALS = 400  # lattice normals the prior may be placed on (``sh.spread_normals``)
+# The prior may move the seen picture by this fraction of the residual (RMS; at least of
+# RESIDUAL_FLOOR of the mean): the seen side's error then grows by at most ~12 % (the change is
+# orthogonal to the residual, √(1 + 0.5²) = 1.118), within the issue's 1.25×.
+PRIOR_HEADROOM = 0.5
+RESIDUAL_FLOOR = 0.005
+PRIOR_STEPS = 40  # halvings of the prior's weight
+NEGATIVE_STEPS = 24
+NEGATIVE_TOLERANCE = 1e-4  # of the channel's mean irradiance
+
+
+@dataclass(frozen=True)
+class PhotoFit:
+    """The nine RGB L_lm recovered from a photo and how far to trust them.
+
+    coefficients: (9, 3) L_lm with the prior and the no-negative-light check (what to store).
+    plain: (9, 3) the data-only least-squares L_lm (the best nine-term picture).
+    residual: RMS over used pixels and channels of photo − plain picture, / their mean.
+    condition: condition number of the equilibrated design matrix of the used pixels.
+    weak_terms: names of the terms in its poorly constrained directions (may be empty).
+    used, clipped, invalid: pixels fitted; left out as clipped; left out as non-finite or
+        masked. prior: its name; prior_weight: its total weight used, / the pixels'. negative: ``negative_light_warning`` or None.
+    normals: (N, 3) world normals of the used pixels; towards: the view axis (to the camera).
+    """
+
+    coefficients: np.ndarray
+    plain: np.ndarray
+    residual: float
+    condition: float
+    weak_terms: tuple
+    used: int
+    clipped: int
+    invalid: int
+    prior: str
+    prior_weight: float
+    negative: object
+    normals: np.ndarray
+    towards: np.ndarray
+
+    def summary(self):
+        """One line for the user: residual, condition, poorly constrained terms, pixels."""
+        weak = ", ".join(self.weak_terms) if self.weak_terms else "none"
+        return (
+            f"residual {100.0 * self.residual:.2f} % of the mean, condition {self.condition:.0f}"
+            f", poorly constrained: {weak}; {self.used} pixels used, {self.clipped} clipped and "
+            f"{self.invalid} unusable left out; unseen side: {self.prior}"
+            + (f" (weight {self.prior_weight:.2g} of the pixels')" if self.prior != "none" else "")
+        )
+
+
+def design_matrix(normals, albedo=1.0):
+    """(N, 9) A with A L = albedo · E(n) / π for one channel (eq. 6-7: Â_l Y_lm(n))."""
+    factors = lambert_band_factors(2)[band_of_each_coefficient(2)]
+    return sh_basis(normals, 2) * (factors * (albedo / np.pi))
+
+
+def ball_picture(coeffs, height, width, circle, camera, albedo=DEFAULT_ALBEDO, background=0.0):
+    """The (H, W, 3) picture of a grey ball of ``albedo`` lit by ``coeffs``: albedo · E / π
+    at each pixel centre inside the circle (no rim margin), ``background`` elsewhere."""
+    rows, cols, normals, _ = ball_normals(height, width, tuple(map(float, circle)),
+                                          camera.checked())
+    picture = np.full((height, width, 3), float(background))
+    picture[rows, cols] = albedo * irradiance(coeffs, normals) / np.pi
+    return picture
+
+
+def _check_inputs(pixels, albedo, margin, prior, prior_weight):
+    a = np.asarray(pixels)
+    if a.ndim != 3 or a.shape[2] < 3 or not np.issubdtype(a.dtype, np.number):
+        raise PhotoError(f"the photo must be an (H, W, 3 or 4) array of numbers, got shape "
+                         f"{a.shape}: pass linear RGB, rows top to bottom")
+    if not (np.isfinite(albedo) and 0.0 < albedo <= 1.0):
+        raise PhotoError(f"the ball's albedo must be in (0, 1], got {albedo!r} (a grey ball: 0.18)")
+    if not (np.isfinite(margin) and 0.0 <= margin < 0.9):
+        raise PhotoError(f"the rim margin must be a fraction of the radius in [0, 0.9), got "
+                         f"{margin!r}")
+    if prior not in PRIORS:
+        raise PhotoError(f"the prior must be one of {', '.join(PRIORS)}, got {prior!r}")
+    if not (np.isfinite(prior_weight) and prior_weight >= 0.0):
+        raise PhotoError(f"the prior weight must be ≥ 0, got {prior_weight!r}")
+    return a
+
+
+def _weak_terms(matrix):
+    """(condition, names): of the column-equilibrated ``matrix``, and the terms loading its
+    singular directions with σ/σ_max < ``WEAK_SINGULAR`` (each as "L20" or "L00+L20")."""
+    scale = np.linalg.norm(matrix, axis=0)
+    _, sigma, vt = np.linalg.svd(matrix / scale, full_matrices=False)
+    condition = float(sigma[0] / sigma[-1]) if sigma[-1] > 0.0 else float("inf")
+    names = []
+    for s, v in zip(sigma, vt):
+        if s < WEAK_SINGULAR * sigma[0]:
+            loaded = [COEFFICIENT_NAMES[k] for k in np.argsort(-np.abs(v))
+                      if abs(v[k]) >= WEAK_LOADING]
+            names.append("+".join(loaded))
+    return condition, tuple(dict.fromkeys(names))
+
+
+def _unseen(normals, lattice, spacing):
+    """Which ``lattice`` normals are farther than ``spacing`` radians from every seen one."""
+    step = max(1, normals.shape[0] // 4000)
+    nearest = np.max(lattice @ normals[::step].T, axis=1)
+    return nearest < np.cos(spacing)
+
+
+def prior_observations(prior, plain, normals, towards, values_mean, albedo):
+    """(unseen lattice normals (M, 3), targets (M, 3) in pixel units) of ``prior``."""
+    lattice = spread_normals(PRIOR_NORMALS)
+    spacing = 1.5 * np.sqrt(4.0 * np.pi / PRIOR_NORMALS)
+    unseen = _unseen(normals, lattice, spacing)
+    where = lattice[unseen]
+    targets = np.broadcast_to(values_mean, where.shape).copy()
+    if prior == "mirror" and where.size:
+        mirrored = where - 2.0 * (where @ towards)[:, None] * towards
+        seen = ~_unseen(normals, mirrored, spacing)
+        targets[seen] = albedo * irradiance(plain, mirrored[seen]) / np.pi
+    return where, targets
+
+
+def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
+              margin=DEFAULT_MARGIN, clip=None, prior="mirror",
+              prior_weight=DEFAULT_PRIOR_WEIGHT, mask=None, max_residual=MAX_RESIDUAL):
+    """The nine RGB L_lm of the world lighting a grey ball in a photo (module docstring).
+
+    ``pixels``: (H, W, 3 or 4) linear RGB, rows top to bottom (alpha ignored); ``circle``:
+    (cx, cy, r) of the ball in pixels; ``camera``: a ``PhotoCamera``; ``clip``: pixels with a
+    channel ≥ it are left out (an 8-bit photo decoded to linear: 1.0), None for none;
+    ``mask``: (H, W) bool, False where the ball is hidden; ``max_residual``: above it the
+    pixels are not a diffuse ball's and a PhotoError is raised (None: never).
+    Returns a ``PhotoFit``; raises PhotoError with one line saying what to do.
+    """
+    a = _check_inputs(pixels, albedo, margin, prior, prior_weight)
+    height, width = a.shape[:2]
+    cx, cy, r = check_circle(circle, height, width, MIN_RADIUS)
+    rows, cols, normals, towards = ball_normals(height, width, (cx, cy, r), camera, margin)
+    values = a[rows, cols, :3].astype(np.float64)
+    usable = np.isfinite(values).all(axis=1)
+    if mask is not None:
+        usable &= np.asarray(mask, dtype=bool)[rows, cols]
+    clipped = usable & (values >= clip).any(axis=1) if clip is not None else np.zeros_like(usable)
+    used = usable & ~clipped
+    count, n_clipped = int(used.sum()), int(clipped.sum())
+    if count < MIN_PIXELS:
+        if n_clipped and n_clipped >= usable.sum() // 2:
+            raise PhotoError(
+                f"{n_clipped} of the ball's {int(usable.sum())} pixels are clipped (a channel "
+                f"≥ {clip:g}), {count} are left: photograph the ball darker, or raise the "
+                "clip threshold for a linear image"
+            )
+        raise PhotoError(
+            f"only {count} usable pixels inside the circle (at least {MIN_PIXELS} are needed): "
+            "check the circle, enlarge it, or lower the rim margin"
+        )
+    normals, values = normals[used], values[used]
+    mean = values.mean(axis=0)
+    if not (mean.max() > 0.0):
+        raise PhotoError(
+            "the ball is black (its pixels average 0 or less): check the exposure and that "
+            "the circle is on the ball"
+        )
+    matrix = design_matrix(normals, albedo)
+    plain = np.linalg.lstsq(matrix, values, rcond=None)[0]
+    residual = float(np.sqrt(np.mean((matrix @ plain - values) ** 2)) / np.mean(mean))
+    unexplained = float(np.sum((matrix @ plain - values) ** 2)
+                        / max(np.sum((values - mean) ** 2), np.finfo(float).tiny))
+    if max_residual is not None and residual > max_residual and unexplained > MAX_UNEXPLAINED:
+        raise PhotoError(
+            f"the pixels in the circle are {100.0 * residual:.0f} % (RMS) away from any "
+            "diffuse ball's picture (a matte ball: a few %): the circle is off, there is no "
+            "ball there, or the ball is shiny or clipped"
+        )
+    condition, weak = _weak_terms(matrix)
+    coeffs, weight, share = plain, 0.0, 0.0
+    if prior != "none" and prior_weight > 0.0:
+        where, targets = prior_observations(prior, plain, normals, towards, mean, albedo)
+        if where.size:
+            prior_matrix = design_matrix(where, albedo)
+            allowed = PRIOR_HEADROOM * max(residual, RESIDUAL_FLOOR) * float(np.mean(mean))
+            coeffs, weight = _prior_fit(matrix, values, plain, prior_matrix, targets,
+                                        prior_weight * count / where.shape[0], allowed)
+            share = weight * where.shape[0] / count
+            scale = np.sqrt(weight)
+            matrix = np.vstack([matrix, scale * prior_matrix])
+            values = np.vstack([values, scale * targets])
+    coeffs = _never_negative(coeffs, matrix, values, albedo, count)
+    return PhotoFit(coeffs, plain, residual, condition, weak, count, n_clipped,
+                    int((~usable).sum()), prior, float(share),
+                    negative_light_warning(coeffs), normals, np.asarray(towards))
+
+
+def _prior_fit(matrix, values, plain, prior_matrix, targets, most, allowed):
+    """(L_lm, w) of the data plus the prior observations with per-row weight w ≤ ``most``:
+    the largest w (halved from ``most``) that moves the seen picture, RMS over pixels and
+    channels, by at most ``allowed`` (pixel units): the prior decides only what the photo
+    leaves open. Normal equations: (AᵀA + w PᵀP) L = Aᵀv + w Pᵀt."""
+    ata, atv = matrix.T @ matrix, matrix.T @ values
+    ptp, ptt = prior_matrix.T @ prior_matrix, prior_matrix.T @ targets
+    count = matrix.shape[0]
+    weight = most
+    for _ in range(PRIOR_STEPS):
+        coeffs = np.linalg.solve(ata + weight * ptp, atv + weight * ptt)
+        change = coeffs - plain
+        moved = np.sqrt(np.einsum("kc,kj,jc->", change, ata, change) / (3 * count))
+        if moved <= allowed:
+            return coeffs, weight
+        weight *= 0.5
+    return plain, 0.0
+
+
+def _never_negative(coeffs, matrix, values, albedo, count):
+    """``coeffs`` refitted per channel with E = 0 observations at the minimum's normal while
+    the 9-term E goes below −``NEGATIVE_TOLERANCE`` × its mean (see the module docstring)."""
+    coeffs = np.array(coeffs)
+    weight = np.sqrt(float(count))  # each zero observation weighs as much as all the pixels
+    for channel in range(3):
+        rows_a, rows_b = [matrix], [values[:, channel]]
+        for _ in range(NEGATIVE_STEPS):
+            minimum = irradiance_minimum(coeffs)
+            mean = mean_irradiance(coeffs)[channel]
+            if mean <= 0.0 or minimum.value[channel] >= -NEGATIVE_TOLERANCE * mean:
+                break
+            rows_a.append(weight * design_matrix(minimum.direction[channel][None], albedo))
+            rows_b.append(np.zeros(1))
+            coeffs[:, channel] = np.linalg.lstsq(np.vstack(rows_a), np.concatenate(rows_b),
+                                                 rcond=None)[0]
+    # What the steps leave (the minimum moves as the fit changes) is lifted: E + deficit
+    # everywhere, i.e. L00 + deficit / c4 (eq. 13's constant term).
+    deficit = np.maximum(-irradiance_minimum(coeffs).value, 0.0)
+    coeffs[0] += deficit / C4
+    return coeffs
+
+
+def relative_rms(estimate, reference):
+    """RMS of estimate − reference over normals and channels, / the mean of ``reference``."""
+    e, ref = np.asarray(estimate, dtype=np.float64), np.asarray(reference, dtype=np.float64)
+    return float(np.sqrt(np.mean((e - ref) ** 2)) / np.mean(ref))
+
+
+def best_nine_term_error(normals, reference):
+    """The nine-term limit on ``normals``: ``relative_rms`` of the least-squares nine-term
+    E(n) fit to the irradiance ``reference`` (N, 3) there, against it."""
+    matrix = design_matrix(normals, np.pi)  # A L = E(n)
+    fit = np.linalg.lstsq(matrix, reference, rcond=None)[0]
+    return relative_rms(matrix @ fit, reference)
+
+
+def scaled_error(estimate, reference):
+    """``relative_rms`` after the one scale s minimising |s estimate − reference| (albedo ×
+    exposure unknown), and s."""
+    e, ref = np.asarray(estimate, dtype=np.float64), np.asarray(reference, dtype=np.float64)
+    s = float(np.sum(e * ref) / np.sum(e * e))
+    return relative_rms(s * e, ref), s
+
+
+@dataclass(frozen=True)
+class ExposureMatch:
+    """The grey ball calibrated to the chrome ball: scale × grey L_lm has the chrome ball's
+    L00 (luminance); l00_colour: per channel relative difference of the scaled L00 left;
+    seen, unseen: ``relative_rms`` of scaled grey vs chrome E(n) on the grey ball's seen
+    normals and over the whole sphere."""
+
+    scale: float
+    l00_colour: np.ndarray
+    seen: float
+    everywhere: float
+
+    def summary(self):
+        return (
+            f"exposure × {self.scale:.4g} to match the chrome ball; then they differ by "
+            f"{100.0 * self.seen:.1f} % on the seen side and {100.0 * self.everywhere:.1f} % "
+            "over all normals"
+        )
+
+
+def match_exposure(grey, chrome, seen_normals=None, weights=(0.2126, 0.7152, 0.0722)):
+    """``ExposureMatch`` of grey-ball ``grey`` (9, 3) against chrome-ball ``chrome`` (9, 3)
+    L_lm: s = (w · chrome L00) / (w · grey L00), w the luminance ``weights`` (Rec.709)."""
+    g, c = np.asarray(grey, dtype=np.float64), np.asarray(chrome, dtype=np.float64)
+    w = np.asarray(weights, dtype=np.float64)
+    if not (g[0] @ w > 0.0 and c[0] @ w > 0.0):
+        raise PhotoError("an L00 is zero or negative: both balls need light to be compared")
+    scale = float((c[0] @ w) / (g[0] @ w))
+    everywhere_normals = spread_normals(1024)
+    seen = everywhere_normals if seen_normals is None else np.asarray(seen_normals)
+    return ExposureMatch(
+        scale, scale * g[0] / c[0] - 1.0,
+        relative_rms(scale * irradiance(g, seen), irradiance(c, seen)),
+        relative_rms(scale * irradiance(g, everywhere_normals), irradiance(c, everywhere_normals)),
+    )

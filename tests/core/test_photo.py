@@ -1,0 +1,231 @@
+"""Lighting from a photo of a grey ball (core.photo, core.ball_camera), on synthetic photos.
+
+Photos here are computed, not rendered: a grey ball's radiance albedo · E(n) / π at each pixel
+centre's normal, E either the exact nine-term polynomial (eq. 13) or the true irradiance of an
+equirect world (eq. 1, ``reference_irradiance``). Cycles renders are in
+tests/blender/test_photo.py.
+"""
+
+import numpy as np
+import pytest
+
+from sh_lighting.core.ball_camera import PhotoCamera, PhotoError, ball_normals, camera_looking
+from sh_lighting.core.colour import srgb_to_linear
+from sh_lighting.core.equirect import texel_directions
+from sh_lighting.core.irradiance import irradiance, reference_irradiance
+from sh_lighting.core.minimum import irradiance_minimum, mean_irradiance
+from sh_lighting.core.photo import (
+    ball_picture,
+    best_nine_term_error,
+    fit_photo,
+    match_exposure,
+    relative_rms,
+    scaled_error,
+)
+from sh_lighting.core.projection import project_equirect
+from sh_lighting.core.sh import spread_normals
+
+LIGHT = np.array(
+    [[3.0, 2.5, 2.0], [0.5, 0.4, 0.2], [1.1, 1.0, 0.9], [-0.4, -0.2, 0.0], [0.2, 0.1, 0.0],
+     [0.0, -0.2, 0.1], [0.3, 0.3, 0.2], [0.1, 0.1, 0.3], [-0.2, 0.0, 0.2]]
+)
+FRONT = camera_looking((0.0, 1.0, 0.0))  # from −Y towards +Y, z up: sees normals facing −Y
+SIZE, CIRCLE = 96, (48.0, 48.0, 44.0)
+EXACT = 1e-9  # float64 least squares on an exact nine-term picture: rounding only
+HEADROOM = 1.25  # the issue's bound: within 1.25× of the best nine-term fit, floor 0.5 %
+
+
+def sunny_world(height=32, width=64):
+    """An equirect world with energy above l = 2: a sky gradient, a ground and a sun."""
+    d = texel_directions(height, width)
+    sky = np.where(d[..., 2:3] > 0.0, [0.6, 0.8, 1.2], [0.3, 0.25, 0.2]) * (1.0 + d[..., 2:3])
+    sun_dir = np.array([0.5, -0.6, 0.62]) / np.linalg.norm([0.5, -0.6, 0.62])
+    sun = 40.0 * np.exp((d @ sun_dir - 1.0) / 0.004)[..., None] * np.array([1.0, 0.9, 0.7])
+    return sky + sun
+
+
+def srgb_8bit(picture):
+    """``picture`` (linear) through an 8-bit sRGB file and back (clipped to 1)."""
+    v = np.clip(picture, 0.0, 1.0)
+    encoded = np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
+    return srgb_to_linear(np.round(encoded * 255.0) / 255.0)
+
+
+def test_orthographic_normals_face_the_camera_at_the_centre_and_graze_at_the_rim():
+    rows, cols, normals, towards = ball_normals(SIZE, SIZE, CIRCLE, FRONT)
+    assert np.allclose(towards, [0.0, -1.0, 0.0])
+    centre = np.argmin((rows + 0.5 - 48.0) ** 2 + (cols + 0.5 - 48.0) ** 2)
+    assert normals[centre] @ towards > 0.999
+    assert np.allclose(np.linalg.norm(normals, axis=1), 1.0)
+    right = np.argmax(cols)  # the rightmost pixel sees +X (the camera's right is +X)
+    assert normals[right][0] > 0.95
+    top = np.argmin(rows)  # the top row sees +Z
+    assert normals[top][2] > 0.95
+
+
+def test_perspective_normals_are_where_the_rays_meet_the_sphere():
+    camera = PhotoCamera(FRONT.matrix, "PERSP", focal_mm=85.0, sensor_mm=36.0)
+    rows, cols, normals, towards = ball_normals(SIZE, SIZE, CIRCLE, camera)
+    assert np.allclose(towards, [0.0, -1.0, 0.0])
+    ortho = ball_normals(SIZE, SIZE, CIRCLE, FRONT)[2]
+    # A close perspective sees less than a hemisphere: the rim normals lean back towards
+    # the camera; the centre is the same.
+    assert normals.shape == ortho.shape
+    assert (normals @ towards).min() > (ortho @ towards).min()
+    long_lens = PhotoCamera(FRONT.matrix, "PERSP", focal_mm=1e5, sensor_mm=36.0)
+    assert np.abs(ball_normals(SIZE, SIZE, CIRCLE, long_lens)[2] - ortho).max() < 1e-3
+
+
+@pytest.mark.parametrize("projection", ["ORTHO", "PERSP"])
+def test_an_exact_nine_term_picture_gives_back_all_nine_terms(projection):
+    camera = PhotoCamera(FRONT.matrix, projection, focal_mm=50.0)
+    picture = ball_picture(LIGHT, SIZE, SIZE, CIRCLE, camera)
+    fit = fit_photo(picture, CIRCLE, camera, prior="none")
+    assert fit.residual < EXACT
+    assert np.abs(fit.plain - LIGHT).max() < 1e-6 * np.abs(LIGHT).max()
+    assert fit.used > 0.8 * np.pi * 44.0**2 * 0.95**2
+
+
+def test_rotated_camera_gives_the_same_world_lighting():
+    side = camera_looking((1.0, 0.3, -0.2), roll=0.4)
+    picture = ball_picture(LIGHT, SIZE, SIZE, CIRCLE, side)
+    fit = fit_photo(picture, CIRCLE, side, prior="none")
+    assert np.abs(fit.plain - LIGHT).max() < 1e-6 * np.abs(LIGHT).max()
+
+
+def test_priors_keep_the_seen_side_and_the_error_per_prior_is_as_measured():
+    world = sunny_world()
+    coeffs = project_equirect(world)
+    rows, cols, normals, _ = ball_normals(SIZE, SIZE, CIRCLE, FRONT)
+    picture = np.zeros((SIZE, SIZE, 3))
+    picture[rows, cols] = 0.18 * reference_irradiance(world, normals) / np.pi
+    picture = srgb_8bit(picture / picture.max() * 0.9)  # exposed to 0.9 of white, 8-bit
+    everywhere = spread_normals(512)
+    truth_everywhere = irradiance(coeffs, everywhere)
+    errors = {}
+    for prior in ("none", "mirror", "ambient"):
+        fit = fit_photo(picture, CIRCLE, FRONT, prior=prior, clip=1.0)
+        truth = reference_irradiance(world, fit.normals)
+        limit = best_nine_term_error(fit.normals, truth)
+        seen, _ = scaled_error(irradiance(fit.coefficients, fit.normals), truth)
+        assert seen <= max(HEADROOM * limit, 0.005), (prior, seen, limit)
+        assert fit.negative is None
+        errors[prior] = scaled_error(irradiance(fit.coefficients, everywhere), truth_everywhere)[0]
+    # Measured: the unseen side is a guess; each prior's error over all normals against the
+    # world's nine terms (benchmarks/REPORT.md "Light from a photograph" lists them).
+    # Measured: none 12.0 %, mirror 8.2 %, ambient 10.0 % (the seen side: 0.94-1.06 %, the
+    # nine-term limit there 0.93 %).
+    assert 0.10 < errors["none"] < 0.14
+    assert errors["mirror"] < 0.75 * errors["none"]
+    assert errors["ambient"] < 0.9 * errors["none"]
+
+
+def hard_sun_picture(sun=(0.9, 0.4, 0.1)):
+    """A ball under one hard sun from the side and behind (+X, +Y) and a faint sky: the plain
+    fit extrapolated to the unseen side goes negative (−20 % of the mean)."""
+    sun = np.asarray(sun) / np.linalg.norm(sun)
+    rows, cols, normals, _ = ball_normals(SIZE, SIZE, CIRCLE, FRONT, 0.0)
+    picture = np.zeros((SIZE, SIZE, 3))
+    picture[rows, cols] = 0.18 * (20.0 * np.maximum(normals @ sun, 0.0)[:, None] + 0.1) / np.pi
+    return picture
+
+
+def test_the_result_never_has_negative_light():
+    picture = hard_sun_picture()
+    plain = fit_photo(picture, CIRCLE, FRONT, prior="none").plain
+    assert irradiance_minimum(plain).value.min() < -0.1 * mean_irradiance(plain).min()
+    for prior in ("none", "mirror", "ambient"):
+        fit = fit_photo(picture, CIRCLE, FRONT, prior=prior)
+        low = irradiance_minimum(fit.coefficients).value / mean_irradiance(fit.coefficients)
+        assert low.min() >= -1e-3, prior
+        assert fit.negative is None
+
+
+def test_a_hard_sun_is_a_ball_and_noise_is_not():
+    fit = fit_photo(hard_sun_picture(), CIRCLE, FRONT)
+    assert 0.3 < fit.residual < 0.45  # the terminator: one sun is far from nine terms
+    noise = np.random.default_rng(0).uniform(0.0, 1.0, (SIZE, SIZE, 3))
+    with pytest.raises(PhotoError, match="away from any diffuse ball"):
+        fit_photo(noise, CIRCLE, FRONT)
+
+
+def test_clipped_and_unusable_pixels_are_left_out_and_counted():
+    picture = ball_picture(LIGHT, SIZE, SIZE, CIRCLE, FRONT)
+    picture[40:44, 40:50] = 1.0  # 40 pixels at the top code of an 8-bit photo
+    picture[60, 40:45] = np.nan  # 5 unusable
+    fit = fit_photo(picture, CIRCLE, FRONT, clip=1.0, prior="none")
+    assert fit.clipped == 40 and fit.invalid == 5
+    assert np.abs(fit.plain - LIGHT).max() < 1e-6 * np.abs(LIGHT).max()
+    unclipped = fit_photo(picture, CIRCLE, FRONT, prior="none", max_residual=None)
+    assert unclipped.clipped == 0 and unclipped.residual > 0.01
+
+
+def test_hidden_quarter_is_less_well_conditioned_and_the_report_names_weak_terms():
+    picture = ball_picture(LIGHT, SIZE, SIZE, CIRCLE, FRONT)
+    full = fit_photo(picture, CIRCLE, FRONT, prior="none")
+    mask = np.ones((SIZE, SIZE), bool)
+    mask[48:, 48:] = False  # the lower right quarter hidden
+    quarter = fit_photo(picture, CIRCLE, FRONT, prior="none", mask=mask)
+    assert quarter.used < 0.8 * full.used and quarter.invalid > 0.2 * full.used
+    assert quarter.condition > full.condition > 10.0
+    # A hemisphere cannot tell ambient from the moment along the view axis (±Y here).
+    assert any("L00" in term and "L1-1" in term for term in full.weak_terms)
+    assert np.abs(quarter.plain - LIGHT).max() < 1e-6 * np.abs(LIGHT).max()
+    assert "poorly constrained: " in full.summary() and "unseen side: none" in full.summary()
+
+
+def test_noise_raises_the_residual_not_the_seen_error_much():
+    rng = np.random.default_rng(1)
+    picture = ball_picture(LIGHT, SIZE, SIZE, CIRCLE, FRONT)
+    noisy = picture * (1.0 + 0.02 * rng.standard_normal(picture.shape))
+    fit = fit_photo(noisy, CIRCLE, FRONT, prior="none")
+    assert 0.015 < fit.residual < 0.025  # 2 % noise per pixel
+    seen = relative_rms(irradiance(fit.plain, fit.normals), irradiance(LIGHT, fit.normals))
+    assert seen < 0.002  # averaged over ~5,000 pixels
+
+
+def test_both_balls_give_the_exposure_and_how_far_the_rest_disagree():
+    grey = LIGHT / 3.0
+    match = match_exposure(grey, LIGHT)
+    assert match.scale == pytest.approx(3.0, rel=1e-12)
+    assert match.seen < 1e-12 and match.everywhere < 1e-12
+    other = LIGHT.copy()
+    other[2] *= 0.5
+    off = match_exposure(grey, other, seen_normals=ball_normals(SIZE, SIZE, CIRCLE, FRONT)[2])
+    assert off.scale == pytest.approx(3.0, rel=1e-12)
+    assert 0.01 < off.seen and 0.01 < off.everywhere
+    assert "exposure × 3" in off.summary()
+
+
+@pytest.mark.parametrize(
+    "circle, message",
+    [((500.0, 48.0, 20.0), "outside the 96×96 image"),
+     ((48.0, 48.0, 0.0), "radius is 0 px"),
+     ((48.0, 48.0, 1.0), "radius is 1 px"),
+     (("a", 1, 2), "three numbers"),
+     ((48.0, float("nan"), 10.0), "not a number")],
+)
+def test_bad_circles_are_refused_in_one_line(circle, message):
+    picture = ball_picture(LIGHT, SIZE, SIZE, CIRCLE, FRONT)
+    with pytest.raises(PhotoError, match=message) as info:
+        fit_photo(picture, circle, FRONT)
+    assert "\n" not in str(info.value)
+
+
+def test_hostile_photos_are_refused_in_one_line():
+    picture = ball_picture(LIGHT, SIZE, SIZE, CIRCLE, FRONT)
+    cases = [
+        (np.ones_like(picture), dict(clip=1.0), "clipped"),
+        (np.zeros_like(picture), {}, "black"),
+        (np.random.default_rng(0).uniform(0.0, 1.0, picture.shape), {}, "diffuse ball"),
+        (picture[..., 0], {}, r"\(H, W, 3 or 4\)"),
+        (picture, dict(albedo=0.0), "albedo"),
+        (picture, dict(prior="guess"), "prior must be"),
+        (picture, dict(margin=1.0), "margin"),
+    ]
+    for pixels, options, message in cases:
+        with pytest.raises(PhotoError, match=message) as info:
+            fit_photo(pixels, CIRCLE, FRONT, **options)
+        assert "\n" not in str(info.value)
+    with pytest.raises(PhotoError, match="not a rotation"):
+        fit_photo(picture, CIRCLE, PhotoCamera(((2.0, 0, 0), (0, 1, 0), (0, 0, 1))))
