@@ -242,6 +242,31 @@ def _factors(b, n):
     return factors
 
 
+def lighting_readers(b, index, column, gain_column, row):
+    """The Attribute nodes (type View Layer) reading coefficient ``index`` of the scene being
+    rendered: (c_lm vector socket, s_lm gain socket). Every group reading the lighting uses
+    these (the "SH Transfer" group too), so all read the same properties the same way."""
+    name = COEFFICIENT_NAMES[index]
+    coefficient = b.node(
+        "ShaderNodeAttribute", column, row, name,
+        attribute_type="VIEW_LAYER", attribute_name=PROPERTY_NAMES[index],
+    )
+    gain = b.node(
+        "ShaderNodeAttribute", gain_column, row + 0.5, f"{name} gain",
+        attribute_type="VIEW_LAYER", attribute_name=GAIN_NAMES[index],
+    )
+    return coefficient.outputs[ATTRIBUTE_VECTOR], gain.outputs[ATTRIBUTE_FAC]
+
+
+def ensure_interface(tree):
+    """Give ``tree`` the group interface of INTERFACE (Normal, Albedo; Irradiance, Diffuse,
+    Shader), keeping matching sockets and their links (groups sharing it are swappable)."""
+    _ensure_interface(tree)
+
+
+Builder = _Builder  # for groups built beside this one (``transfer.nodes``)
+
+
 def _build_nodes(tree):
     """Clear ``tree`` and add the nodes of eq. 13 (see the module docstring)."""
     tree.nodes.clear()
@@ -257,16 +282,9 @@ def _build_nodes(tree):
     total = None
     for index in reversed(range(9)):
         name = COEFFICIENT_NAMES[index]
-        coefficient = b.node(
-            "ShaderNodeAttribute", 10, index, name,
-            attribute_type="VIEW_LAYER", attribute_name=PROPERTY_NAMES[index],
-        )
-        gain = b.node(
-            "ShaderNodeAttribute", 9, index + 0.5, f"{name} gain",
-            attribute_type="VIEW_LAYER", attribute_name=GAIN_NAMES[index],
-        )
+        coefficient, gain = lighting_readers(b, index, 10, 9, index)
         scaled = b.math("MULTIPLY", 10, index + 0.5, f"s {name} × factor")
-        b.link(gain.outputs[ATTRIBUTE_FAC], scaled.inputs[0])
+        b.link(gain, scaled.inputs[0])
         if index == 0:
             scaled.inputs[1].default_value = C4
         else:
@@ -277,7 +295,7 @@ def _build_nodes(tree):
         else:
             term = b.vector_math("MULTIPLY_ADD", 11, index, f"+ {label}")
             b.link(total, term.inputs[2])
-        b.link(coefficient.outputs[ATTRIBUTE_VECTOR], term.inputs[0])
+        b.link(coefficient, term.inputs[0])
         b.link(scaled.outputs[0], term.inputs[1])
         total = term.outputs[0]
 

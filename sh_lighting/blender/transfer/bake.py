@@ -1,0 +1,370 @@
+"""Bake the transfer vectors T_lm of picked meshes with Cycles and store them in the meshes.
+
+Precomputed radiance transfer (Sloan, Kautz and Snyder 2002, eq. 1-3 for diffuse surfaces):
+for distant lighting L(ω) = Σ L_lm Y_lm(ω), a diffuse point p with visibility and
+interreflection receives the irradiance
+
+    E(p) = Σ_lm T_lm(p) L_lm,   T_lm(p) = the irradiance at p under a world emitting Y_lm
+
+(T_lm of an unoccluded point with normal n is Â_l Y_lm(n), eq. 13 of Ramamoorthi and
+Hanrahan 2001 term by term: docs/reference.md). Cycles computes T_lm: its Diffuse bake with
+the Direct and Indirect contributions and no Color is the light a diffuse surface receives
+divided by π (checked: a constant world of radiance 1 bakes to exactly 1.0 on an unoccluded
+plane), shadowed by every object of the scene and with the interreflections of the scene's
+materials, up to the scene's Cycles bounces. So T_lm = π · bake of the world Y_lm; the
+basis worlds and the negative lobes (by linearity) are ``basis``.
+
+Stored per face corner (each corner has its face's normal: hard edges stay hard) in nine
+colour attributes ``ATTRIBUTE_NAMES`` (FLOAT_COLOR, CORNER; RGB: interreflection off coloured
+materials makes T_lm coloured), read by the "SH Transfer" node group (``transfer.nodes``)
+with Attribute nodes, so a saved .blend renders without the add-on. The object keeps a JSON
+record ``RECORD`` (samples, seconds, and the fingerprints ``status`` compares: its own
+geometry and placement, and the scene's renderable objects) so the panel can say the bake is
+stale after an edit.
+
+The user's scene is changed only for the bake and put back in ``finally``: world, render
+engine, samples, selection, active colour attributes; the group nodes the add-on put into
+materials are muted during the bake (so SH emission is not baked as light; a material in
+Emission mode then reflects no light into the bake, which ``BakeInfo.notes`` says).
+"""
+
+import json
+import time
+import zlib
+from typing import NamedTuple
+
+import bpy
+import numpy as np
+
+from ...core.sh import COEFFICIENT_NAMES
+from ..scene_data import PROPERTY_NAMES
+from ..shading import materials
+from . import basis
+
+ATTRIBUTE_NAMES = tuple(name.replace("sh_L", "sh_T", 1) for name in PROPERTY_NAMES)
+SCRATCH_NAME = "sh_transfer_bake"
+RECORD = "sh_transfer"
+RECORD_VERSION = 1
+#: Cycles samples per corner: measured on the test scene (plane and box, tests/blender/
+#: test_transfer.py): the relative RMSE of T against a 1024-sample bake falls as 1/√samples
+#: (benchmarks/REPORT.md, "Transfer").
+DEFAULT_SAMPLES = 64
+MAX_SAMPLES = 1 << 16
+RENDERED_TYPES = {"MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES", "POINTCLOUD", "VOLUME"}
+
+
+class TransferError(ValueError):
+    """Objects that cannot be baked, with what to do as the message; nothing was changed."""
+
+
+class BakeInfo(NamedTuple):
+    objects: list  # names of the baked objects
+    corners: int  # face corners baked, all objects
+    vertices: int  # vertices of the baked meshes
+    samples: int
+    seconds: float  # wall time of the whole bake
+    basis_seconds: list  # per bake of a basis world, in index order
+    notes: list  # what the user should know about the result (one line each)
+
+
+def check_objects(scene, objects):
+    """The objects as a list if every one can be baked, else a TransferError naming the first
+    problem (one line: what is wrong and what to do)."""
+    if scene is None:
+        raise TransferError("no scene to bake in")
+    picked = list(objects)
+    if not picked:
+        raise TransferError("no objects to bake: select the meshes to bake")
+    view_layer = _view_layer(scene)
+    for obj in picked:
+        if not isinstance(obj, bpy.types.Object):
+            raise TransferError(f"{obj!r} is not an object: pass Blender objects")
+        name = obj.name
+        if obj.type != "MESH":
+            raise TransferError(f"'{name}' is a {obj.type.lower()}, not a mesh: bake meshes only")
+        if scene.objects.get(name) != obj:
+            raise TransferError(f"'{name}' is not in scene '{scene.name}'")
+        if obj.library is not None or obj.data.library is not None:
+            raise TransferError(f"'{name}' is linked from a library: make it local to bake it")
+        if obj.mode != "OBJECT":
+            raise TransferError(f"'{name}' is in {obj.mode.title()} Mode: leave it to bake")
+        if obj.hide_render:
+            raise TransferError(f"'{name}' is hidden from renders: enable it for renders")
+        if not obj.visible_get(view_layer=view_layer):
+            raise TransferError(f"'{name}' is hidden in the view layer: unhide it to bake it")
+        modifiers = [m.name for m in obj.modifiers if m.show_render]
+        if modifiers:
+            raise TransferError(
+                f"'{name}' has modifiers ({', '.join(modifiers)}): the transfer is stored on "
+                "the mesh itself, so apply them (or disable them for renders) and bake again"
+            )
+        if len(obj.data.polygons) == 0:
+            raise TransferError(f"'{name}' has no faces: there is no surface to bake")
+        sharing = [o.name for o in bpy.data.objects if o.data == obj.data and o != obj]
+        if sharing:
+            raise TransferError(
+                f"'{name}' shares its mesh with '{sharing[0]}' (a linked duplicate): the "
+                "transfer depends on where each sits, so make it single user "
+                "(Object > Relations > Make Single User) and bake again"
+            )
+    if len({o.as_pointer() for o in picked}) != len(picked):
+        raise TransferError("an object is picked twice: pick each once")
+    return picked
+
+
+def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None):
+    """Bake T_lm for ``objects`` in ``scene`` (see the module docstring); a ``BakeInfo``.
+
+    ``report(text)`` is called with a line per basis function (its time); the window
+    manager's progress bar counts the nine bakes. A TransferError (nothing changed) if an
+    object cannot be baked or ``samples`` is not a whole number in 1 … MAX_SAMPLES.
+    """
+    picked = check_objects(scene, objects)
+    if isinstance(samples, bool) or not isinstance(samples, int) or not 1 <= samples <= MAX_SAMPLES:
+        raise TransferError(f"samples is {samples!r}: use a whole number from 1 to {MAX_SAMPLES}")
+    report = report or (lambda text: None)
+    started = time.perf_counter()
+    saved = _Saved(scene, picked)
+    window_manager = bpy.context.window_manager
+    bakes, basis_seconds, notes = [], [], []
+    try:
+        saved.prepare(samples)
+        if saved.emission_materials:
+            notes.append(
+                "materials in Emission mode reflect no light into the bake: "
+                + ", ".join(sorted(saved.emission_materials))
+            )
+        if window_manager is not None:
+            window_manager.progress_begin(0, len(ATTRIBUTE_NAMES))
+        for index in range(len(ATTRIBUTE_NAMES)):
+            began = time.perf_counter()
+            bakes.append(_bake_basis(scene, saved, picked, index))
+            basis_seconds.append(time.perf_counter() - began)
+            report(
+                f"Transfer {COEFFICIENT_NAMES[index]}: {basis_seconds[-1]:.1f} s "
+                f"({index + 1}/9)"
+            )
+            if window_manager is not None:
+                window_manager.progress_update(index + 1)
+    finally:
+        if window_manager is not None:
+            window_manager.progress_end()
+        saved.restore()
+    seconds = time.perf_counter() - started
+    corners = vertices = 0
+    scene_print = scene_fingerprint(scene)
+    for position, obj in enumerate(picked):
+        transfer = _transfer([bake[position] for bake in bakes])
+        bad = int(np.count_nonzero(~np.isfinite(transfer)))
+        if bad:
+            transfer = np.nan_to_num(transfer, nan=0.0, posinf=0.0, neginf=0.0)
+            notes.append(f"'{obj.name}': {bad} values were not finite (degenerate faces?), set to 0")
+        _store(obj, transfer)
+        corners += len(obj.data.loops)
+        vertices += len(obj.data.vertices)
+        obj[RECORD] = json.dumps({
+            "version": RECORD_VERSION, "samples": samples, "seconds": round(seconds, 3),
+            "geometry": geometry_fingerprint(obj), "scene": scene_print,
+        })
+        obj.data.update()
+    return BakeInfo([o.name for o in picked], corners, vertices, samples, seconds,
+                    basis_seconds, notes)
+
+
+def _transfer(bakes):
+    """(9, corners, 3) T_lm from the nine bakes (each (corners, 3), basis worlds 0-8)."""
+    constant = bakes[0]
+    rows = [np.pi * basis.CONSTANT_SCALE * constant]
+    for index in range(1, len(bakes)):
+        rows.append(np.pi * (bakes[index] - basis.OFFSETS[index] * constant))
+    return np.stack(rows)
+
+
+def _bake_basis(scene, saved, picked, index):
+    """Bake basis world ``index`` into every picked mesh's scratch attribute; their RGB."""
+    world = basis.new_basis_world(index)
+    try:
+        scene.world = world
+        with bpy.context.temp_override(
+            scene=scene, view_layer=saved.view_layer, active_object=picked[0],
+            object=picked[0], selected_objects=picked, selected_editable_objects=picked,
+        ):
+            result = bpy.ops.object.bake(
+                type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, target="VERTEX_COLORS",
+                use_selected_to_active=False, use_clear=True, margin=0,
+            )
+        if "FINISHED" not in result:
+            raise TransferError(f"the Cycles bake of {COEFFICIENT_NAMES[index]} was cancelled")
+    finally:
+        scene.world = saved.world
+        bpy.data.worlds.remove(world)
+    rows = []
+    for obj in picked:
+        attribute = obj.data.color_attributes[SCRATCH_NAME]
+        values = np.empty(len(attribute.data) * 4, dtype=np.float32)
+        attribute.data.foreach_get("color", values)
+        rows.append(values.reshape(-1, 4)[:, :3].astype(np.float64))
+    return rows
+
+
+def _store(obj, transfer):
+    """Write (9, corners, 3) ``transfer`` into the nine attributes (alpha 1)."""
+    mesh = obj.data
+    rgba = np.ones((transfer.shape[1], 4), dtype=np.float32)
+    for name, values in zip(ATTRIBUTE_NAMES, transfer):
+        attribute = mesh.color_attributes.get(name)
+        if attribute is not None and (attribute.domain != "CORNER"
+                                      or attribute.data_type != "FLOAT_COLOR"):
+            mesh.color_attributes.remove(attribute)
+            attribute = None
+        if attribute is None:
+            attribute = mesh.color_attributes.new(name, "FLOAT_COLOR", "CORNER")
+        rgba[:, :3] = values
+        attribute.data.foreach_set("color", rgba.ravel())
+
+
+class _Saved:
+    """What the bake changes in the user's scene, and its restoration."""
+
+    def __init__(self, scene, picked):
+        self.scene = scene
+        self.picked = picked
+        self.view_layer = _view_layer(scene)
+        self.world = scene.world
+        self.render = {"engine": scene.render.engine}
+        cycles = scene.cycles
+        self.cycles = {key: getattr(cycles, key) for key in (
+            "samples", "use_adaptive_sampling", "sample_clamp_direct", "sample_clamp_indirect",
+        ) if hasattr(cycles, key)}
+        self.active_colour = {o.name: o.data.color_attributes.active_color_name for o in picked}
+        self.render_colour = {o.name: o.data.color_attributes.render_color_index for o in picked}
+        self.muted = []
+        self.emission_materials = set()
+
+    def prepare(self, samples):
+        self.scene.render.engine = "CYCLES"
+        cycles = self.scene.cycles
+        cycles.samples = samples
+        cycles.use_adaptive_sampling = False
+        cycles.sample_clamp_direct = 0.0
+        cycles.sample_clamp_indirect = 0.0
+        for obj in self.picked:
+            colours = obj.data.color_attributes
+            scratch = colours.get(SCRATCH_NAME) or colours.new(SCRATCH_NAME, "FLOAT_COLOR", "CORNER")
+            colours.active_color = scratch
+        for material in bpy.data.materials:
+            for node in materials.added_nodes(material):
+                if not node.mute:
+                    node.mute = True
+                    self.muted.append((material.name, node.name))
+                    if materials.mode_of(material) == "EMISSION":
+                        self.emission_materials.add(material.name)
+
+    def restore(self):
+        scene = self.scene
+        scene.world = self.world
+        scene.render.engine = self.render["engine"]
+        for key, value in self.cycles.items():
+            setattr(scene.cycles, key, value)
+        for material_name, node_name in self.muted:
+            material = bpy.data.materials.get(material_name)
+            node = material.node_tree.nodes.get(node_name) if material else None
+            if node is not None:
+                node.mute = False
+        for obj in self.picked:
+            colours = obj.data.color_attributes
+            scratch = colours.get(SCRATCH_NAME)
+            if scratch is not None:
+                colours.remove(scratch)
+            active = self.active_colour[obj.name]
+            if active and colours.get(active) is not None:
+                colours.active_color_name = active
+            if 0 <= self.render_colour[obj.name] < len(colours):
+                colours.render_color_index = self.render_colour[obj.name]
+
+
+def _view_layer(scene):
+    context_layer = getattr(bpy.context, "view_layer", None)
+    if bpy.context.scene == scene and context_layer is not None:
+        return context_layer
+    return scene.view_layers[0]
+
+
+# --- Staleness -----------------------------------------------------------------------------
+
+
+def geometry_fingerprint(obj):
+    """Vertex and corner counts and a CRC of the coordinates, corner vertices and placement."""
+    mesh = obj.data
+    coordinates = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", coordinates)
+    corners = np.empty(len(mesh.loops), dtype=np.int32)
+    mesh.loops.foreach_get("vertex_index", corners)
+    crc = zlib.crc32(coordinates.tobytes())
+    crc = zlib.crc32(corners.tobytes(), crc)
+    crc = zlib.crc32(np.array(obj.matrix_world, dtype=np.float32).tobytes(), crc)
+    return f"{len(mesh.vertices)}:{len(mesh.loops)}:{crc:08x}"
+
+
+def scene_fingerprint(scene):
+    """A CRC over the scene's rendered objects: names, placement, mesh coordinates."""
+    crc = 0
+    for obj in sorted(scene.objects, key=lambda o: o.name):
+        if obj.type not in RENDERED_TYPES or obj.hide_render:
+            continue
+        crc = zlib.crc32(obj.name.encode(), crc)
+        crc = zlib.crc32(np.array(obj.matrix_world, dtype=np.float32).tobytes(), crc)
+        if obj.type == "MESH":
+            coordinates = np.empty(len(obj.data.vertices) * 3, dtype=np.float32)
+            obj.data.vertices.foreach_get("co", coordinates)
+            crc = zlib.crc32(coordinates.tobytes(), crc)
+    return f"{crc:08x}"
+
+
+def record(obj):
+    """The object's bake record (dict) or None if it was never baked or is unreadable."""
+    text = obj.get(RECORD) if obj is not None else None
+    if not isinstance(text, str):
+        return None
+    try:
+        value = json.loads(text)
+    except ValueError:
+        return None
+    return value if isinstance(value, dict) else None
+
+
+def status(scene, obj, scene_print=None):
+    """(state, message): ("NONE", …) never baked, ("OK", …) or ("STALE", what changed).
+
+    ``scene_print``: ``scene_fingerprint(scene)`` if already computed (a panel listing many
+    objects computes it once).
+    """
+    info = record(obj)
+    if info is None or obj.type != "MESH":
+        return "NONE", f"'{obj.name}' has no transfer bake"
+    missing = [n for n in ATTRIBUTE_NAMES if obj.data.color_attributes.get(n) is None]
+    if missing:
+        return "STALE", f"'{obj.name}': the transfer attributes were removed: bake again"
+    if info.get("geometry") != geometry_fingerprint(obj):
+        return "STALE", f"'{obj.name}' was edited or moved since the bake: bake again"
+    if info.get("scene") != (scene_print or scene_fingerprint(scene)):
+        return "STALE", (
+            f"'{obj.name}': objects of the scene changed since the bake (moved, edited, "
+            "added, hidden or removed): bake again"
+        )
+    return "OK", (f"'{obj.name}': baked, {info.get('samples')} samples, "
+                  f"{info.get('seconds')} s")
+
+
+def remove_transfer(obj):
+    """Delete the bake's attributes and record from ``obj``; True if there was one."""
+    found = obj.get(RECORD) is not None
+    if RECORD in obj:
+        del obj[RECORD]
+    if obj.type == "MESH":
+        for name in ATTRIBUTE_NAMES:
+            attribute = obj.data.color_attributes.get(name)
+            if attribute is not None:
+                obj.data.color_attributes.remove(attribute)
+                found = True
+    return found

@@ -1,0 +1,97 @@
+"""The "SH Transfer" shader node group: E(p) = Σ T_lm(p) L_lm from native nodes only.
+
+Precomputed radiance transfer for diffuse surfaces (Sloan, Kautz and Snyder 2002, eq. 3): the
+lighting is the scene's nine coefficients L_lm = s_lm · c_lm, read by the very Attribute nodes
+(type View Layer) of the "SH Irradiance" group (``shading.nodes.lighting_readers``), so the
+sliders, presets, rotation, gains and keyframes change the lighting live; the transfer T_lm(p)
+is read per face corner from the mesh's colour attributes ``bake.ATTRIBUTE_NAMES`` (Attribute
+nodes, type Geometry). Per channel, E = Σ T_lm ⊙ L_lm, summed from L22 back to L00 as in the
+"SH Irradiance" group. A saved .blend renders it where the add-on is not installed.
+
+The interface is the "SH Irradiance" group's (``shading.nodes.INTERFACE``): the Apply
+machinery can put either group into a material. Its Normal input is not used: the transfer
+already holds the surface's orientation, shadows and interreflection (a normal map's detail is
+not in it). On an object without the attributes (never baked) the Attribute nodes read 0, so
+the group gives no light: Apply in this mode only to materials of baked objects.
+
+Outputs: Irradiance (E), Diffuse (Albedo · E / π), Shader (Emission of Diffuse, strength 1).
+"""
+
+from math import pi
+
+import bpy
+
+from ...core.sh import COEFFICIENT_NAMES
+from ..shading.nodes import Builder, ensure_interface, lighting_readers
+from .bake import ATTRIBUTE_NAMES
+
+GROUP_NAME = "SH Transfer"
+GROUP_MARKER = "sh_lighting_transfer_group"
+GROUP_VERSION = 1
+DESCRIPTION = (
+    "Diffuse lighting with shadows and interreflection: E = sum of T_lm (baked per corner in "
+    "the mesh attributes sh_T00 ... sh_T22) times L_lm (scene properties sh_L00 ... sh_L22 "
+    "times their gains); precomputed radiance transfer, Sloan, Kautz and Snyder 2002"
+)
+
+
+def is_transfer_group(tree):
+    return getattr(tree, "bl_idname", "") == "ShaderNodeTree" and GROUP_MARKER in tree
+
+
+def find_node_group():
+    found = [t for t in bpy.data.node_groups if t.library is None and is_transfer_group(t)]
+    found.sort(key=lambda tree: (tree.name != GROUP_NAME, tree.name))
+    return found[0] if found else None
+
+
+def ensure_node_group():
+    """The file's "SH Transfer" group, created if missing, its nodes (re)built."""
+    tree = find_node_group()
+    if tree is None:
+        tree = bpy.data.node_groups.new(GROUP_NAME, "ShaderNodeTree")
+    ensure_interface(tree)
+    _build_nodes(tree)
+    tree[GROUP_MARKER] = GROUP_VERSION
+    if hasattr(tree, "description"):
+        tree.description = DESCRIPTION
+    return tree
+
+
+def _build_nodes(tree):
+    tree.nodes.clear()
+    b = Builder(tree)
+    group_in = b.node("NodeGroupInput", 0, 9)
+    total = None
+    for index in reversed(range(9)):
+        name = COEFFICIENT_NAMES[index]
+        coefficient, gain = lighting_readers(b, index, 3, 1, index)
+        transfer = b.node(
+            "ShaderNodeAttribute", 2, index, f"T {name}",
+            attribute_type="GEOMETRY", attribute_name=ATTRIBUTE_NAMES[index],
+        )
+        scaled = b.vector_math("SCALE", 4, index + 0.5, f"s {name} · T")
+        b.link(transfer.outputs["Color"], scaled.inputs[0])
+        b.link(gain, scaled.inputs["Scale"])
+        if total is None:
+            term = b.vector_math("MULTIPLY", 5, index, f"T {name} L {name}")
+        else:
+            term = b.vector_math("MULTIPLY_ADD", 5, index, f"+ T {name} L {name}")
+            b.link(total, term.inputs[2])
+        b.link(coefficient, term.inputs[0])
+        b.link(scaled.outputs["Vector"], term.inputs[1])
+        total = term.outputs[0]
+
+    albedo_e = b.vector_math("MULTIPLY", 6, 7, "Albedo · E")
+    b.link(group_in.outputs["Albedo"], albedo_e.inputs[0])
+    b.link(total, albedo_e.inputs[1])
+    diffuse = b.vector_math("SCALE", 7, 7, "/ π")
+    b.link(albedo_e.outputs["Vector"], diffuse.inputs[0])
+    diffuse.inputs["Scale"].default_value = 1.0 / pi
+    emission = b.node("ShaderNodeEmission", 8, 8)
+    b.link(diffuse.outputs["Vector"], emission.inputs["Color"])
+    emission.inputs["Strength"].default_value = 1.0
+    group_out = b.node("NodeGroupOutput", 9, 7)
+    b.link(total, group_out.inputs["Irradiance"])
+    b.link(diffuse.outputs["Vector"], group_out.inputs["Diffuse"])
+    b.link(emission.outputs["Emission"], group_out.inputs["Shader"])
