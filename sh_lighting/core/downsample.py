@@ -25,6 +25,8 @@ import numpy as np
 
 from .equirect import texel_solid_angles
 
+CACHE_VALUES = 1 << 16  # input values handled at a time (256 KB of float32)
+
 
 def whole_factor(height, width, target_width):
     """The smallest k dividing both ``height`` and ``width`` with width / k ≤ ``target_width``,
@@ -58,20 +60,31 @@ def block_downsample(pixels, factor, with_bound=False):
     widest = np.maximum(np.sin(edges[:-1]), np.sin(edges[1:]))
     widest = np.where((edges[:-1] <= 0.5 * pi) & (edges[1:] >= 0.5 * pi), 1.0, widest)
     diameter = np.minimum(pi, pi / out_h + widest * min(2.0 * pi * k / width, pi))
-    scratch = np.empty((k, width * channels), dtype=np.result_type(pixels.dtype, np.float32))
+    if pixels.strides[0] < 0:  # a flipped view (Blender's readback): the same rows upwards;
+        out, bound = block_downsample(pixels[::-1], k, with_bound)  # Ω_i and d_B are symmetric
+        return out[::-1], bound
+    # blocks of columns small enough for the core's cache: CACHE_VALUES floats of k rows
+    step = max(1, CACHE_VALUES // (k * k * channels)) * k * channels
+    dtype = np.result_type(pixels.dtype, np.float32)
+    scratch = np.empty((k, min(step, width * channels)), dtype=dtype)
     for i in range(out_h):
         r0 = i * k
-        w = solid[r0 : r0 + k].astype(scratch.dtype)
-        flat = pixels[r0 : r0 + k].reshape(k, width * channels)
-        summed = (w @ flat).reshape(out_w, k, channels).sum(axis=1, dtype=np.float64)
-        mean = summed / (float(solid[r0 : r0 + k].sum(dtype=np.float64)) * k)  # (out_w, C)
-        out[i] = mean[:, :3]
-        if with_bound:
-            # Σ_t Ω_t |L_t − L̄_B| of each block: the block means repeated over their columns
-            spread_of = np.repeat(mean.astype(scratch.dtype), k, axis=0).reshape(-1)
-            np.subtract(flat, spread_of[None, :], out=scratch)
-            np.abs(scratch, out=scratch)
-            spread = (w @ scratch).reshape(out_w, k, channels)[..., :3].sum(axis=(0, 1),
+        w = solid[r0 : r0 + k].astype(dtype)
+        area = float(solid[r0 : r0 + k].sum(dtype=np.float64)) * k
+        rows = pixels[r0 : r0 + k].reshape(k, width * channels)
+        for c0 in range(0, width * channels, step):
+            flat = rows[:, c0 : c0 + step]
+            blocks = flat.shape[1] // (k * channels)
+            b0 = c0 // (k * channels)
+            mean = (w @ flat).reshape(blocks, k, channels).sum(axis=1, dtype=np.float64) / area
+            out[i, b0 : b0 + blocks] = mean[:, :3]
+            if with_bound:
+                # Σ_t Ω_t |L_t − L̄_B| of each block: the block means repeated over their columns
+                repeated = np.repeat(mean.astype(dtype), k, axis=0).reshape(-1)
+                part = scratch[:, : flat.shape[1]]
+                np.subtract(flat, repeated[None, :], out=part)
+                np.abs(part, out=part)
+                spread = (w @ part).reshape(blocks, k, channels)[..., :3].sum(axis=(0, 1),
                                                                             dtype=np.float64)
-            bound += diameter[i] * spread
+                bound += diameter[i] * spread
     return out, bound

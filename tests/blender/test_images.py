@@ -77,6 +77,18 @@ def test_image_pixels_of_datablock_is_flipped_view(tmp_path):
     assert pixels.base is not None and pixels.base.size == H * W * 4
 
 
+def test_linear_pixels_of_a_float_image_is_the_readback_itself(tmp_path):
+    """No second copy of a float image (at 8192x4096 it cost as long as the readback)."""
+    from sh_lighting.blender.world.images import linear_pixels
+
+    expected = known_rgba()
+    image = bpy.data.images.load(write_exr(tmp_path / "known.exr", expected))
+    pixels = linear_pixels(image)
+    np.testing.assert_array_equal(pixels, expected)
+    assert pixels.strides[0] < 0 and pixels.base.size == H * W * 4
+    bpy.data.images.remove(image)
+
+
 def test_generated_float_image(tmp_path):
     expected = known_rgba()
     image = bpy.data.images.new("generated", W, H, float_buffer=True, alpha=True)
