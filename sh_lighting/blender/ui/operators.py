@@ -90,14 +90,13 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
     def execute(self, context):
         start = time.perf_counter()
         try:
-            _coeffs, info = compute.compute_and_store(context.scene)
+            _coeffs, info = compute.compute_and_store(
+                context.scene, error_normals=compute.REPORT_ERROR_NORMALS)
         except ValueError as error:  # WorldError and invalid coefficients
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         lights.remove_lights(context.scene)  # the whole world is in the SH again
-        elapsed = time.perf_counter() - start
-        origin = "the world image" if info.source == "image" else "a capture of the world"
-        self.report({"INFO"}, f"SH lighting computed from {origin} in {elapsed:.2f} s")
+        self.report({"INFO"}, compute.report(info, time.perf_counter() - start))
         return {"FINISHED"}
 
 

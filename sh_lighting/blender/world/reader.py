@@ -33,7 +33,8 @@ import bpy
 
 from ...core.mirror_ball import project_mirror_ball
 from ...core.projection import project_equirect
-from ...core.world_map import apply_mapping
+from ...core.sh import spread_normals
+from ...core.world_map import apply_mapping, world_error
 from .. import compat
 from .capture import CaptureError, capture_world
 from .images import (
@@ -62,7 +63,10 @@ class WorldInfo:
     ``image`` and ``projection`` name the image and its mapping, ``rotation`` is the Mapping
     node's XYZ Euler rotation in radians (None without a Mapping node) and ``strength`` the
     Background's (both as evaluated at the scene's frame). ``working_space``: the colour
-    space of the coefficients. ``elapsed`` is the wall time in seconds.
+    space of the coefficients. ``elapsed`` is the wall time in seconds. ``error``: the
+    9-term error (mean, max) against the world's brute-force irradiance at ``error_normals``
+    normals (``world_map.world_error``), when it was asked for and could be measured (an
+    equirect image or a capture with light in every channel), else None.
     """
 
     source: str
@@ -75,6 +79,8 @@ class WorldInfo:
     strength: float | None = None
     reason: str = ""
     capture_width: int | None = None
+    error: tuple[float, float] | None = None
+    error_normals: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -348,8 +354,7 @@ def read_world(scene, depsgraph=None):
 # -- the coefficients --------------------------------------------------------------------------
 
 
-def _project_image(source):
-    pixels = source.pixels()
+def _project_image(source, pixels):
     project = project_equirect if source.projection == "EQUIRECTANGULAR" else project_mirror_ball
     try:
         coeffs = project(pixels)
@@ -361,18 +366,32 @@ def _project_image(source):
     return apply_mapping(coeffs, source.strength, source.rotation)
 
 
-def world_coefficients(scene, capture_width=256, depsgraph=None):
+def _error(pixels, coeffs, count, strength=1.0, euler=None):
+    """``world_map.world_error`` at ``count`` spread normals, or None (count 0, no light)."""
+    if not count:
+        return None
+    return world_error(pixels, coeffs, spread_normals(count), strength, euler)
+
+
+def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0):
     """(9, 3) float64 L_lm of ``scene``'s world as Cycles renders it, and a ``WorldInfo``.
 
     ``read_world`` decides: an image is projected (``core``), anything else is captured by
-    Cycles at ``capture_width`` × ``capture_width``/2 at the scene's current frame. Raises
-    WorldError (a ValueError) when the world cannot give any lighting.
+    Cycles at ``capture_width`` × ``capture_width``/2 at the scene's current frame.
+    ``error_normals`` > 0 also measures the 9-term error against the world's brute-force
+    irradiance at that many normals (``WorldInfo.error``; not for mirror-ball images), which
+    costs that many passes over the pixels. Raises WorldError (a ValueError) when the world
+    cannot give any lighting.
     """
     start = time.perf_counter()
     source = read_world(scene, depsgraph)
     world = scene.world
     if isinstance(source, ImageSource):
-        coeffs = _project_image(source)
+        pixels = source.pixels()
+        coeffs = _project_image(source, pixels)
+        error = None
+        if source.projection == "EQUIRECTANGULAR":
+            error = _error(pixels, coeffs, error_normals, source.strength, source.rotation)
         info = WorldInfo(
             source="image",
             world=world.name,
@@ -382,6 +401,8 @@ def world_coefficients(scene, capture_width=256, depsgraph=None):
             projection=source.projection,
             rotation=source.rotation,
             strength=source.strength,
+            error=error,
+            error_normals=error_normals if error is not None else 0,
         )
         return coeffs, info
     try:
@@ -395,6 +416,7 @@ def world_coefficients(scene, capture_width=256, depsgraph=None):
             f"the Cycles capture of world '{world.name}' is not usable: {error}; check the "
             "world's nodes for values that make it render NaN or infinity"
         ) from None
+    error = _error(pixels, coeffs, error_normals)
     info = WorldInfo(
         source="capture",
         world=world.name,
@@ -402,5 +424,7 @@ def world_coefficients(scene, capture_width=256, depsgraph=None):
         working_space=compat.working_space(),
         reason=source.reason,
         capture_width=int(capture_width),
+        error=error,
+        error_normals=error_normals if error is not None else 0,
     )
     return coeffs, info
