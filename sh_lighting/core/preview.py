@@ -101,19 +101,39 @@ def _encode(radiance, exposure, alpha, show_negative):
     return rgba
 
 
+def _sphere_radiance(c, size):
+    """E(n)/π (albedo 1) of every pixel of the sphere view: (size, size, 3)."""
+    return (_sphere_basis(size) @ irradiance_coefficients(c)).reshape(size, size, 3) / np.pi
+
+
+def _order_two(coeffs):
+    c, order = check_coefficients(coeffs)
+    if order != 2:
+        raise ValueError(f"the preview takes the 9 coefficients of order 2, got order {order}")
+    return c
+
+
+def fit_exposure(coeffs, size=128):
+    """The exposure (stops) at which the sphere view's brightest pixel shows exactly white:
+    −log₂ of the largest E(n)/π of any channel over the disc, so the sphere reads whatever
+    the lighting's level (a sun-lit HDRI at exposure 0 turns half the disc white). 0 when no
+    pixel is lit (E ≤ 0 everywhere)."""
+    _, alpha = sphere_normals(size)
+    peak = _sphere_radiance(_order_two(coeffs), size)[alpha > 0.0].max()
+    return float(-np.log2(peak)) if peak > 0.0 else 0.0
+
+
 def irradiance_sphere_image(coeffs, size=128, exposure=0.0, show_negative=False):
     """A white diffuse sphere under the lighting, as seen in the sphere view: (size, size, 4).
 
     Shows the reflected radiance E(n)/π (eq. 6, albedo 1) × 2^exposure, sRGB-encoded and
-    clipped to [0, 1]; negative irradiance shows black, or ``NEGATIVE_COLOUR`` when
-    ``show_negative``. Alpha is the disc mask.
+    clipped to [0, 1] (``fit_exposure`` gives the exposure that puts the brightest pixel at
+    1); negative irradiance shows black, or ``NEGATIVE_COLOUR`` when ``show_negative``.
+    Alpha is the disc mask.
     """
-    c, order = check_coefficients(coeffs)
-    if order != 2:
-        raise ValueError(f"the preview takes the 9 coefficients of order 2, got order {order}")
+    c = _order_two(coeffs)
     _, alpha = sphere_normals(size)
-    radiance = (_sphere_basis(size) @ irradiance_coefficients(c)).reshape(size, size, 3) / np.pi
-    return _encode(radiance, exposure, alpha, show_negative)
+    return _encode(_sphere_radiance(c, size), exposure, alpha, show_negative)
 
 
 def irradiance_equirect_image(coeffs, width, height, exposure=0.0, show_negative=False):
@@ -123,8 +143,6 @@ def irradiance_equirect_image(coeffs, width, height, exposure=0.0, show_negative
     top to bottom, the centre column facing +X); same encoding as ``irradiance_sphere_image``,
     alpha 1.
     """
-    c, order = check_coefficients(coeffs)
-    if order != 2:
-        raise ValueError(f"the preview takes the 9 coefficients of order 2, got order {order}")
+    c = _order_two(coeffs)
     e = _equirect_basis(int(height), int(width)) @ irradiance_coefficients(c)
     return _encode(e.reshape(height, width, 3) / np.pi, exposure, 1.0, show_negative)

@@ -28,9 +28,14 @@ from sh_lighting.blender.world.images import image_pixels
 from sh_lighting.blender.world.reader import world_coefficients
 from sh_lighting.core import edits, windowing
 from sh_lighting.core.equirect import texel_directions, texel_solid_angles
-from sh_lighting.core.irradiance import reference_irradiance
+from sh_lighting.core.irradiance import irradiance, reference_irradiance
 from sh_lighting.core.minimum import irradiance_minimum, mean_irradiance, negative_light_warning
-from sh_lighting.core.preview import basis_sphere_images, irradiance_sphere_image
+from sh_lighting.core.preview import (
+    basis_sphere_images,
+    fit_exposure,
+    irradiance_sphere_image,
+    sphere_normals,
+)
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.rotation import euler_xyz_matrix, rotate_coefficients
 from sh_lighting.core.sh import sh_basis
@@ -508,7 +513,7 @@ def test_previews_hold_cores_images_and_follow_edits(addon, monkeypatch):
         assert (previews.from_preview(preview)[0, 0] == 0).all()  # no coloured square
 
     scene_data.store(scene, KNOWN, SCRIPT)
-    scene.view_settings.exposure = -1.0
+    scene.view_settings.exposure = -1.0  # the scene's exposure does not expose the sphere
     calls = []
     original = previews.irradiance_sphere_image
     monkeypatch.setattr(previews, "irradiance_sphere_image",
@@ -516,7 +521,8 @@ def test_previews_hold_cores_images_and_follow_edits(addon, monkeypatch):
     panels.draw_main(RecordingLayout(), bpy.context)
     preview = previews.collection()[previews.IRRADIANCE_NAME]
     assert tuple(preview.image_size) == (previews.IRRADIANCE_SIZE, previews.IRRADIANCE_SIZE)
-    image = irradiance_sphere_image(KNOWN, previews.IRRADIANCE_SIZE, -1.0, show_negative=True)
+    stops = fit_exposure(KNOWN, previews.IRRADIANCE_SIZE)
+    image = irradiance_sphere_image(KNOWN, previews.IRRADIANCE_SIZE, stops, show_negative=True)
     assert_allclose(previews.from_preview(preview), premultiplied(image), rtol=0, atol=BYTE)
     panels.draw_main(RecordingLayout(), bpy.context)
     assert len(calls) == 1  # same coefficients: not recomputed
@@ -524,9 +530,34 @@ def test_previews_hold_cores_images_and_follow_edits(addon, monkeypatch):
     bpy.ops.shlight.exposure(stops=2.0)
     panels.draw_main(RecordingLayout(), bpy.context)
     assert len(calls) == 2
-    image = irradiance_sphere_image(stored(), previews.IRRADIANCE_SIZE, -1.0, show_negative=True)
+    # 4× the light: the same picture, shown 2 stops lower
+    assert previews.irradiance(stored())[1] == pytest.approx(stops - 2.0, abs=1e-9)
     assert_allclose(previews.from_preview(preview), premultiplied(image), rtol=0, atol=BYTE)
     assert (previews.from_preview(preview)[0, 0] == 0).all()  # transparent corners: no square
+
+
+def test_preview_of_a_sunlit_hdri_reads_at_the_default_exposure(addon, hdri_dir):
+    """Issue 23 item 6: at exposure 0 the sphere of a sun-lit world was a white disc (forest:
+    49 % of its pixels white). Now its brightest pixel is white and the rest shade: few
+    pixels saturated, and the stored preview's bytes grow with the irradiance."""
+    scene = bpy.context.scene
+    environment_world(scene, str(hdri_dir / "forest.exr"))
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+    assert scene.view_settings.exposure == 0.0
+    panels.draw_main(RecordingLayout(), bpy.context)
+    pixels = previews.from_preview(previews.collection()[previews.IRRADIANCE_NAME])
+    normals, alpha = sphere_normals(previews.IRRADIANCE_SIZE)
+    inside = alpha == 1.0  # whole pixels of the disc (the rim is premultiplied)
+    shown = pixels[inside][:, :3]
+    assert (shown >= 254.5 / 255).any(axis=1).mean() < 0.01
+    assert shown.max() >= 254.5 / 255  # the peak is white
+    # monotone: per channel, brighter irradiance never shows darker (beyond a byte's rounding)
+    e = irradiance(stored(), normals[inside])
+    for channel in range(3):
+        order = np.argsort(e[:, channel], kind="stable")
+        steps = np.diff(shown[order, channel])
+        assert steps.min() >= -1.0 / 255, channel
+    assert shown[:, 0].max() - shown[:, 0].min() > 0.5  # it shades over half the range
 
 
 def test_previews_collection_is_removed_on_unregister_without_leaks():
@@ -576,7 +607,7 @@ def test_main_panel_shows_the_sphere_and_one_warning_line(addon, monkeypatch):
     sphere = SimpleNamespace(icon_id=200)
     drawn = []
     monkeypatch.setattr(previews, "irradiance",
-                        lambda coeffs, exposure=0.0: drawn.append((coeffs, exposure)) or sphere)
+                        lambda coeffs: drawn.append(coeffs) or (sphere, -1.25))
     layout = RecordingLayout()
     panels.draw_main(layout, bpy.context)
     assert not layout.of("icon") and not drawn  # no coefficients: no sphere
@@ -586,8 +617,7 @@ def test_main_panel_shows_the_sphere_and_one_warning_line(addon, monkeypatch):
     panels.draw_main(layout, bpy.context)
     assert [c[1] for c in layout.of("icon")] == [200]
     assert layout.calls[0][0] == "icon"  # the sphere comes first
-    assert_array_equal(drawn[0][0], stored())
-    assert drawn[0][1] == scene.view_settings.exposure
+    assert_array_equal(drawn[0], stored())
     warning = [c for c in layout.of("operator") if c[1] == "shlight.window"]
     assert len(warning) == 1 and warning[0][2].kind == "MINIMAL" and warning[0][3]["alert"]
     tooltip = design_ui.SHLIGHT_OT_window.description(bpy.context, SimpleNamespace(kind="MINIMAL"))
@@ -597,7 +627,8 @@ def test_main_panel_shows_the_sphere_and_one_warning_line(addon, monkeypatch):
     layout = RecordingLayout()
     panels.draw_main(layout, bpy.context)
     assert "shlight.window" not in layout.operators()
-    assert "White sphere, front view" in layout.text()  # the same one line, no warning
+    # the same one line, no warning: what the sphere shows and how it is exposed
+    assert "White sphere, peak shown white (-1.2 EV)" in layout.text()
 
 
 def test_design_panel_draws_every_design_operator(addon):

@@ -9,6 +9,7 @@ from sh_lighting.core.irradiance import irradiance
 from sh_lighting.core.preview import (
     NEGATIVE_COLOUR,
     basis_sphere_images,
+    fit_exposure,
     irradiance_equirect_image,
     irradiance_sphere_image,
     linear_to_srgb,
@@ -98,6 +99,31 @@ def test_irradiance_sphere_values_at_known_pixels():
     # centre faces −Y: u = 0, E9 = 3/32 per unit power
     assert image[64, 64, 0] == pytest.approx(linear_to_srgb(2.0 * 3 / 32 / pi), abs=EXACT)
     assert image[0, 64, 0] > image[64, 64, 0] > image[128, 64, 0]  # lit from above
+
+
+def test_fit_exposure_puts_the_brightest_pixel_at_white():
+    """Issue 23 item 6: the sphere is exposed to its own range. A constant sky of radiance c
+    shows c everywhere, so the fit is −log₂ of its largest channel; a light from above
+    4× brighter is shown 2 stops lower with the same picture."""
+    sky = constant([4.0, 2.0, 1.0])
+    assert fit_exposure(sky, 32) == pytest.approx(-2.0, abs=1e-12)
+    image = irradiance_sphere_image(sky, 32, exposure=fit_exposure(sky, 32))
+    inside = image[..., 3] > 0
+    assert np.abs(image[inside][:, :3] - linear_to_srgb(np.array([1.0, 0.5, 0.25]))).max() < EXACT
+    above = delta([0.2, -0.5, 1.0], rgb=(3.0, 2.0, 1.0))
+    first = irradiance_sphere_image(above, 64, exposure=fit_exposure(above, 64))
+    again = irradiance_sphere_image(4 * above, 64, exposure=fit_exposure(4 * above, 64))
+    assert fit_exposure(4 * above, 64) == pytest.approx(fit_exposure(above, 64) - 2.0, abs=1e-12)
+    assert np.abs(first - again).max() < EXACT
+    assert first[..., :3].max() == pytest.approx(1.0, abs=EXACT)
+    assert (first[..., :3] >= 1.0 - EXACT).any(axis=-1).sum() <= 3  # only the peak is white
+
+
+def test_fit_exposure_of_unlit_coefficients_is_zero():
+    assert fit_exposure(np.zeros((9, 3)), 16) == 0.0
+    assert fit_exposure(-constant([1.0, 1.0, 1.0]), 16) == 0.0  # negative everywhere
+    with pytest.raises(ValueError, match="order 2"):
+        fit_exposure(np.zeros((4, 3)), 16)
 
 
 def test_negative_irradiance_is_flagged_on_request():

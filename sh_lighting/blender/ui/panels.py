@@ -73,11 +73,15 @@ def world_kind(context):
     return "procedural" if isinstance(source, world.ProceduralSource) else "image"
 
 
+def sphere_caption(stops):
+    """The line under the sphere: what it is and how it is exposed."""
+    return f"White sphere, peak shown white ({stops:+.1f} EV)"
+
+
 def draw_sphere(layout, context, coeffs):
     """The irradiance sphere of ``coeffs``, centred, and the negative-light warning."""
-    scene = context.scene
     try:
-        preview = previews.irradiance(coeffs, scene.view_settings.exposure)
+        preview, stops = previews.irradiance(coeffs)
     except ValueError as error:  # e.g. coefficients typed in as NaN
         wrapped(layout, context, str(error), icon="ERROR")
         return
@@ -87,7 +91,8 @@ def draw_sphere(layout, context, coeffs):
     row.template_icon(icon_value=preview.icon_id, scale=IRRADIANCE_SCALE)
     # One line under the sphere either way (the panel does not jump while dragging): the
     # negative-light warning as a button that smooths it (the whole warning in its tooltip),
-    # or what the sphere shows.
+    # or what the sphere shows: it is exposed to its own range (brightest point white), and
+    # the line says by how much, so a brighter lighting reads as a lower exposure.
     row = col.row()
     if negative_light_warning(coeffs):
         row.alert = True
@@ -95,7 +100,7 @@ def draw_sphere(layout, context, coeffs):
         op.kind = "MINIMAL"
     else:
         row.alignment = "CENTER"
-        row.label(text="White sphere, front view")
+        row.label(text=sphere_caption(stops))
 
 
 def draw_main(layout, context):

@@ -1,9 +1,11 @@
 """The Design panel's images: one ``bpy.utils.previews`` collection, filled from core's numpy.
 
 ``register()`` opens the collection and fills the 9 basis images (they never change);
-``unregister()`` removes it. The irradiance sphere is refreshed on demand: ``irradiance``
-compares a cheap signature of the coefficients (their bytes and the exposure) with the one it
-last drew and recomputes only when it differs, so drawing the panel costs nothing while the
+``unregister()`` removes it. The irradiance sphere is exposed to its own range (its brightest
+pixel white, ``core.preview.fit_exposure``), not through the scene's view transform: a UI
+icon is shown as it is stored, and at the scene's exposure a sun-lit world turned the sphere
+into a white disc. It is refreshed on demand: ``irradiance`` compares the coefficients' bytes
+with those it last drew and recomputes only when they differ, so drawing the panel costs nothing while the
 lighting stays the same and one small image (``bench_preview``: a few ms) after an edit.
 
 ``ImagePreview`` pixels run bottom row first and are stored as bytes (values quantised to
@@ -18,7 +20,12 @@ import bpy
 import bpy.utils.previews
 import numpy as np
 
-from ...core.preview import basis_sphere_images, irradiance_sphere_image, linear_to_srgb
+from ...core.preview import (
+    basis_sphere_images,
+    fit_exposure,
+    irradiance_sphere_image,
+    linear_to_srgb,
+)
 
 BASIS_SIZE = 64
 IRRADIANCE_SIZE = 128
@@ -26,8 +33,9 @@ BASIS_NAMES = tuple(f"basis_{k}" for k in range(9))
 IRRADIANCE_NAME = "irradiance"
 SWATCH_SIZE = 16
 
-# The collection and the signatures of the irradiance image and swatches it holds.
-_state = {"collection": None, "signature": None, "swatches": {}}
+# The collection, the signature of the irradiance image it holds and that image's exposure,
+# and the swatches' signatures.
+_state = {"collection": None, "signature": None, "stops": 0.0, "swatches": {}}
 
 
 def to_preview(preview, rgba):
@@ -63,28 +71,30 @@ def basis():
     return tuple(pcoll[name] for name in BASIS_NAMES)
 
 
-def signature(coeffs, exposure):
-    """What the irradiance image depends on, cheap to compare: the float64 bytes, exposure."""
-    return np.asarray(coeffs, dtype=np.float64).tobytes(), float(exposure)
+def signature(coeffs):
+    """What the irradiance image depends on, cheap to compare: the float64 bytes."""
+    return np.asarray(coeffs, dtype=np.float64).tobytes()
 
 
-def irradiance(coeffs, exposure=0.0):
-    """The ``ImagePreview`` of the irradiance sphere of ``coeffs`` ((9, 3) L_lm).
+def irradiance(coeffs):
+    """(the ``ImagePreview`` of the irradiance sphere of ``coeffs`` ((9, 3) L_lm), its
+    exposure in stops).
 
     A white diffuse sphere as seen from the front (``core.preview.irradiance_sphere_image``)
-    at ``exposure`` stops, negative irradiance in magenta; recomputed only when the
-    coefficients or the exposure changed since the last call.
+    at the exposure that shows its brightest pixel white (``fit_exposure``), negative
+    irradiance in magenta; recomputed only when the coefficients changed since the last call.
     """
     pcoll = collection()
     preview = pcoll.get(IRRADIANCE_NAME) or pcoll.new(IRRADIANCE_NAME)
-    key = signature(coeffs, exposure)
+    key = signature(coeffs)
     if key != _state["signature"]:
+        stops = fit_exposure(coeffs, IRRADIANCE_SIZE)
         image = irradiance_sphere_image(
-            coeffs, IRRADIANCE_SIZE, exposure=exposure, show_negative=True
+            coeffs, IRRADIANCE_SIZE, exposure=stops, show_negative=True
         )
         to_preview(preview, image)
-        _state["signature"] = key
-    return preview
+        _state["signature"], _state["stops"] = key, stops
+    return preview, _state["stops"]
 
 
 def swatch_colour(rgb):
