@@ -25,7 +25,7 @@ Everything is in Blender world axes (z up); pixels are (H, W, 3 or 4), rows top 
 
 import numpy as np
 
-from .irradiance import irradiance, reference_irradiance, relative_error, total_power
+from .irradiance import reference_irradiance
 from .projection import project_equirect
 from .rotation import euler_xyz_matrix, rotate_coefficients
 
@@ -78,49 +78,6 @@ def map_irradiance(pixels, normals, strength=1.0, euler=None):
     n = np.asarray(normals, dtype=np.float64)
     # rows are normals: (R n)ᵀ = nᵀ Rᵀ, and Rᵀ = mapping_rotation(euler)
     return equirect_irradiance(pixels, n @ mapping_rotation(euler)) * float(strength)
-
-
-# world_error measures maps wider than this on a copy averaged down to at most this width.
-ERROR_MAX_WIDTH = 1024
-
-
-def average_down(pixels, max_width=ERROR_MAX_WIDTH):
-    """``pixels`` (H, W, C) averaged over f × f blocks, f the smallest power of 2 that makes
-    the width ≤ ``max_width`` and divides H and W (the pixels themselves when none does).
-
-    Each block keeps its radiance integral: rows are weighted by their solid angle
-    (cos θ0 − cos θ1, docs/reference.md §3), columns equally, so L00 is unchanged and the
-    irradiance moves only by where light sits inside a block (at most f texels).
-    """
-    height, width = pixels.shape[:2]
-    f = 1
-    while width // f > max_width and height % (2 * f) == 0 and width % (2 * f) == 0:
-        f *= 2
-    if f == 1:
-        return pixels
-    theta = np.linspace(0.0, np.pi, height + 1)
-    solid = np.cos(theta[:-1]) - np.cos(theta[1:])  # per row (the 2π/W factor cancels)
-    rgb = np.asarray(pixels[..., :3], dtype=np.float64) * solid[:, None, None]
-    blocks = rgb.reshape(height // f, f, width // f, f, 3).sum(axis=(1, 3))
-    weights = solid.reshape(height // f, f).sum(axis=1) * f
-    return blocks / weights[:, None, None]
-
-
-def world_error(pixels, coeffs, normals, strength=1.0, euler=None, max_width=ERROR_MAX_WIDTH):
-    """(mean, max) 9-term irradiance error of ``coeffs`` against the world showing equirect
-    ``pixels`` at ``strength`` through ``euler``, as fractions of the total light P = ∫L dω,
-    the paper's measure (``irradiance.relative_error``: the worst channel's mean over
-    ``normals``, the largest over normals and channels); None when a channel has no light.
-
-    E9 by eq. 13 against the brute-force ``map_irradiance`` (eq. 1 over every texel) at unit
-    world ``normals`` (N, 3), of the map ``average_down`` to ``max_width``: N passes over at
-    most max_width × max_width/2 texels, whatever the image's size.
-    """
-    power = total_power(coeffs)
-    if not (power > 0.0).all():
-        return None
-    truth = map_irradiance(average_down(pixels, max_width), normals, strength, euler)
-    return relative_error(irradiance(coeffs, normals), truth, power)
 
 
 def equirect_irradiance(pixels, normals):

@@ -10,14 +10,12 @@ from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.rotation import euler_xyz_matrix, rotate_coefficients
 from sh_lighting.core.sh import spread_normals
 from sh_lighting.core.world_map import (
-    average_down,
     equirect_irradiance,
     map_coefficients,
     map_irradiance,
     mapping_rotation,
     sun_light_rotation,
     to_world_direction,
-    world_error,
 )
 
 EXACT = 1e-12
@@ -150,59 +148,3 @@ def test_sun_light_rotation_points_minus_z_away_from_the_sun(direction):
 def test_sun_light_rotation_rejects_a_zero_direction():
     with pytest.raises(ValueError, match="non-zero"):
         sun_light_rotation((0.0, 0.0, 0.0))
-
-
-# -- the 9-term error against the world (the Compute button's report) --------------------------
-
-
-def one_hot(height=64, width=128, row=20, column=77, value=500.0):
-    pixels = np.zeros((height, width, 3))
-    pixels[row, column] = value
-    return pixels
-
-
-def test_average_down_keeps_the_integral_and_leaves_small_maps_alone():
-    rng = np.random.default_rng(5)
-    pixels = rng.random((64, 128, 3)) * 10.0 ** rng.uniform(-3, 3, (64, 128, 3))
-    assert average_down(pixels, 128) is pixels
-    coarse = average_down(pixels, 32)
-    assert coarse.shape == (16, 32, 3)
-    # L00 is the integral: unchanged to rounding; higher bands move by where light sits
-    # inside a 4×4 block
-    fine_l, coarse_l = project_equirect(pixels), project_equirect(coarse)
-    np.testing.assert_allclose(coarse_l[0], fine_l[0], rtol=1e-13)
-    assert np.abs(coarse_l - fine_l).max() < 0.05 * np.abs(fine_l).max()
-    assert average_down(pixels[:63], 32) is not None  # odd height: no block size divides it
-    assert average_down(pixels[:63], 32).shape == (63, 128, 3)
-
-
-def test_world_error_of_a_near_delta_is_the_known_one_through_the_mapping():
-    """docs/reference.md §2: a directional source's 9-term error is 0.0307 P on average and
-    3/32 P at most; the world seen through a Mapping rotation and a Strength has the same
-    relative error, and the rotation must be the world's (the unrotated truth is far off)."""
-    pixels = one_hot()
-    normals = spread_normals(256)
-    coeffs = map_coefficients(pixels, STRENGTH, EULER)
-    mean, largest = world_error(pixels, coeffs, normals, STRENGTH, EULER)
-    assert 0.028 < mean < 0.033 and 0.085 < largest <= 3 / 32 + 1e-9
-    wrong_mean, _ = world_error(pixels, coeffs, normals, STRENGTH, None)
-    assert wrong_mean > 3 * mean
-
-
-def test_world_error_of_a_map_averaged_down_by_two_moves_little():
-    """A 512-wide near-delta (0.7° texels) measured at 256 wide: the hardest case for
-    averaging, all the light in one texel; measured 0.17 % (mean) and 1.5 % (max) of the
-    error itself."""
-    pixels = one_hot(256, 512, 79, 307)
-    normals = spread_normals(256)
-    coeffs = map_coefficients(pixels, STRENGTH, EULER)
-    fine = world_error(pixels, coeffs, normals, STRENGTH, EULER)
-    coarse = world_error(pixels, coeffs, normals, STRENGTH, EULER, max_width=256)
-    assert abs(coarse[0] - fine[0]) < 0.01 * fine[0]
-    assert abs(coarse[1] - fine[1]) < 0.03 * fine[1]
-
-
-def test_world_error_is_none_without_light_in_a_channel():
-    pixels = one_hot()
-    pixels[..., 2] = 0.0
-    assert world_error(pixels, project_equirect(pixels), spread_normals(16)) is None

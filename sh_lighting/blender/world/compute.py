@@ -37,7 +37,7 @@ def world_provenance(info):
 
 
 # Normals at which the Compute button measures the 9-term error against the world: 64 brute-
-# force passes over the pixels, averaged down to at most 1024×512 (world_map.world_error).
+# force passes over the pixels, box-averaged to about 512 wide (irradiance.error_estimate).
 # Measured on the 2-core machine at a load average of 11: the whole click on Blender's
 # forest.exr (1024×512) 1.7 s, error 0.76 % mean (768 normals: 0.79 %); 256 normals took 3.8 s.
 REPORT_ERROR_NORMALS = 64

@@ -33,8 +33,8 @@ import bpy
 
 from ...core.mirror_ball import project_mirror_ball
 from ...core.projection import project_equirect
-from ...core.sh import spread_normals
-from ...core.world_map import apply_mapping, world_error
+from ...core.irradiance import error_estimate
+from ...core.world_map import apply_mapping
 from .. import compat
 from .capture import CaptureError, capture_world
 from .images import (
@@ -65,7 +65,7 @@ class WorldInfo:
     Background's (both as evaluated at the scene's frame). ``working_space``: the colour
     space of the coefficients. ``elapsed`` is the wall time in seconds. ``error``: the
     9-term error (mean, max) against the world's brute-force irradiance at ``error_normals``
-    normals (``world_map.world_error``), when it was asked for and could be measured (an
+    normals (``irradiance.error_estimate``), when it was asked for and could be measured (an
     equirect image or a capture with light in every channel), else None.
     """
 
@@ -355,22 +355,23 @@ def read_world(scene, depsgraph=None):
 
 
 def _project_image(source, pixels):
+    """The L_lm of the image itself (before the Mapping rotation and Strength)."""
     project = project_equirect if source.projection == "EQUIRECTANGULAR" else project_mirror_ball
     try:
-        coeffs = project(pixels)
+        return project(pixels)
     except ValueError as error:
         raise WorldError(
             f"image '{source.image.name}' of world '{source.world}': {error}"
         ) from None
-    # The Mapping node turns the lookup direction by R: the lighting is the image turned by Rᵀ.
-    return apply_mapping(coeffs, source.strength, source.rotation)
 
 
-def _error(pixels, coeffs, count, strength=1.0, euler=None):
-    """``world_map.world_error`` at ``count`` spread normals, or None (count 0, no light)."""
+def _error(pixels, coeffs, count):
+    """(mean, max) of ``irradiance.error_estimate`` of equirect ``pixels`` and their own
+    ``coeffs`` at ``count`` normals, or None (count 0, a channel without light)."""
     if not count:
         return None
-    return world_error(pixels, coeffs, spread_normals(count), strength, euler)
+    estimate = error_estimate(pixels, coeffs, count)
+    return None if estimate is None else (estimate["mean"], estimate["max"])
 
 
 def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0):
@@ -379,8 +380,8 @@ def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0
     ``read_world`` decides: an image is projected (``core``), anything else is captured by
     Cycles at ``capture_width`` × ``capture_width``/2 at the scene's current frame.
     ``error_normals`` > 0 also measures the 9-term error against the world's brute-force
-    irradiance at that many normals (``WorldInfo.error``; not for mirror-ball images), which
-    costs that many passes over the pixels. Raises WorldError (a ValueError) when the world
+    irradiance at that many normals (``WorldInfo.error``, ``irradiance.error_estimate``; not
+    for mirror-ball images), which costs that many passes over a map at most about 512 wide. Raises WorldError (a ValueError) when the world
     cannot give any lighting.
     """
     start = time.perf_counter()
@@ -388,10 +389,14 @@ def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0
     world = scene.world
     if isinstance(source, ImageSource):
         pixels = source.pixels()
-        coeffs = _project_image(source, pixels)
+        own = _project_image(source, pixels)
+        # The Mapping node turns the lookup direction by R: the lighting is the image turned by
+        # Rᵀ, and Strength scales it. Neither changes the error as a fraction of the light, so
+        # it is measured on the image itself (the same normals, turned with it).
+        coeffs = apply_mapping(own, source.strength, source.rotation)
         error = None
         if source.projection == "EQUIRECTANGULAR":
-            error = _error(pixels, coeffs, error_normals, source.strength, source.rotation)
+            error = _error(pixels, own, error_normals)
         info = WorldInfo(
             source="image",
             world=world.name,
