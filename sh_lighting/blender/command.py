@@ -5,7 +5,7 @@ when started as ``blender -c ID ARGS...`` (``--command``; implies background mod
 enabled add-ons and extensions are registered, ``execute`` gets the arguments that follow the
 id and its return value is Blender's exit status. Registering ``sh_lighting`` here, in the
 extension's register(), makes the installed extension's command line available without a
-path to ``cli.py``. The handle is kept to unregister it; a second registration of the same id
+path to ``cli/script.py``. The handle is kept to unregister it; a second registration of the same id
 would make Blender refuse both ("registered duplicate command").
 """
 

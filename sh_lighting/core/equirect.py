@@ -64,6 +64,15 @@ def check_finite_pixels(pixels):
     return pixels
 
 
+def zero_nonfinite(pixels):
+    """``pixels`` with every NaN or infinite value set to 0 (black): a new float32 array when
+    there are any, else ``pixels`` itself (what ``nonfinite="zero"`` means everywhere)."""
+    a = np.asarray(pixels)
+    if np.isfinite(a).all():
+        return a
+    return np.where(np.isfinite(a), a, 0.0).astype(np.float32)
+
+
 def row_edges(height):
     """θ at the H + 1 row boundaries, top (θ = 0) to bottom (θ = π)."""
     return np.linspace(0.0, pi, height + 1)

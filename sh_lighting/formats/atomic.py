@@ -50,7 +50,7 @@ def real_destination(path):
     return Path(os.path.realpath(path)) if path.is_symlink() else path
 
 
-def _check_destination(path, overwrite, what, hint):
+def check_destination(path, overwrite, what, hint):
     """The real destination of ``path`` (``real_destination``), or a clear OSError."""
     path = Path(path)
     if path.is_dir():
@@ -173,7 +173,7 @@ def write_text_atomic(path, text, overwrite=False, what="file", hint="pass overw
     ("preset file", "enable Overwrite").
     """
     path = Path(path)
-    real = _check_destination(path, overwrite, what, hint)
+    real = check_destination(path, overwrite, what, hint)
     data = text.encode("utf-8")  # encoding errors raise before anything touches the disk
     temporary = temporary_path(real)
     fd = _create(temporary, what, path)
@@ -210,7 +210,7 @@ def atomic_destination(path, overwrite=False, suffix=".tmp", what="file",
     the extension (``.blend``, ``.png``) see the right one.
     """
     path = Path(path)
-    real = _check_destination(path, overwrite, what, hint)
+    real = check_destination(path, overwrite, what, hint)
     temporary = temporary_path(real, suffix)
     os.close(_create(temporary, what, path))
     os.unlink(temporary)

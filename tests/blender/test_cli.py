@@ -19,7 +19,7 @@ from cli_runs import (
 )
 from numpy.testing import assert_allclose
 
-from sh_lighting import cli
+from sh_lighting.cli import script as cli_script
 from sh_lighting.blender.shading import materials
 from sh_lighting.blender import scene_data
 from sh_lighting.formats.presets import read_preset
@@ -220,11 +220,11 @@ def test_batch_progress_resume_force_and_bad_files(tmp_path):
     assert hidden_files(out) == []
 
 
-# --- running the file as a script (what blender -b -P cli.py -- ... does) --------------------
+# --- running the file as a script (what blender -b -P cli/script.py -- ... does) ------------
 
 
 def test_script_mode_finds_the_package_or_says_what_to_install(inputs, tmp_path):
-    script = ROOT / "sh_lighting" / "cli" / "__init__.py"
+    script = ROOT / "sh_lighting" / "cli" / "script.py"
     found = run(script, "--", "compute", inputs["hdri"], cwd=tmp_path, python_args=())
     assert found.returncode == 0, found.stderr
     assert_allclose(table_row(found.stdout, "L00"), EXACT[0], atol=1e-5)
@@ -237,7 +237,7 @@ def test_script_mode_finds_the_package_or_says_what_to_install(inputs, tmp_path)
 
 
 def test_package_candidates_prefer_enabled_add_ons():
-    assert cli._candidates(
+    assert cli_script.candidates(
         ["cycles", "bl_ext.user_default.sh_lighting"],
         ["bl_ext.blender_org.sh_lighting", "bl_ext.user_default.sh_lighting", "io_x"],
     ) == ["bl_ext.user_default.sh_lighting", "sh_lighting", "bl_ext.blender_org.sh_lighting"]

@@ -15,6 +15,7 @@ from cli_runs import EXACT, SKY, constant_pixels, make_inputs, run
 from numpy.testing import assert_allclose
 
 from sh_lighting import cli
+from sh_lighting.cli import render
 from sh_lighting.blender.shading import materials
 from sh_lighting.blender import scene_data
 from sh_lighting.formats.presets import read_preset, write_preset
@@ -261,7 +262,7 @@ def test_render_frames_are_a_range_not_a_list():
     args = cli.build_parser().parse_args(
         ["render", "x.blend", "--output", "o", "--frames", "1", "3000000"]
     )
-    frames = cli._frames(args, None)
+    frames = render.frame_range(args, None)
     assert isinstance(frames, range) and len(frames) == 3_000_000 and frames[-1] == 3_000_000
 
 

@@ -49,6 +49,7 @@ from pathlib import Path
 import bpy
 import numpy as np
 
+from ...choices import FILAMENT_FRAMES, FORMATS
 from ...core.coefficients import check_coefficients
 from ...core.colour import REC709, convert_coefficients
 from ...formats import atomic
@@ -58,18 +59,6 @@ from ...formats.presets import PresetError, preset_to_json, read_preset
 from .. import compat, scene_data
 from ..world import reader as world_module
 
-# format id -> (label, file extension)
-FORMATS = {
-    "sh_lighting": ("SH Lighting preset", ".json"),
-    "threejs": ("three.js LightProbe JSON", ".json"),
-    "gltf": ("glTF environment (EXT_lights_image_based)", ".gltf"),
-    "filament": ("Filament sh.txt", ".txt"),
-}
-# Filament frame id -> what it lines up with (core.interop); the first is the default
-FILAMENT_FRAMES = {
-    "cmgen": "cmgen's own output (its specular KTX) for the same equirect image",
-    "gltf": "a glTF export of the Blender scene",
-}
 PRESET_SUBDIR = "sh_lighting"
 PRESET_EXTENSION = ".json"
 MAX_NAME_LENGTH = 64

@@ -40,6 +40,7 @@ from typing import NamedTuple
 
 import bpy
 
+from ...choices import APPLY_MODES
 from .. import compat
 from . import keep_bsdf
 from .diffuse_weight import linked_socket, no_diffuse_reason, source_node
@@ -49,8 +50,8 @@ from .nodes import GROUP_NAME, ensure_node_group
 # "added": [names of the other nodes added]} (version 1: emission, nothing else added).
 NODE_MARKER = "sh_lighting_original_links"
 RECORD_VERSION = 2
-MODES = ("KEEP_BSDF", "EMISSION")
-DEFAULT_MODE = "KEEP_BSDF"
+MODES = APPLY_MODES
+DEFAULT_MODE = MODES[0]
 MODE_ITEMS = (
     ("KEEP_BSDF", "Keep BSDF",
      "Keep the material's BSDF (lamps, shadows, reflections); SH replaces the world's diffuse "
@@ -112,6 +113,25 @@ def check_mode(mode):
     if mode not in MODES:
         raise ValueError(f"unknown Apply mode {mode!r}: use one of {', '.join(MODES)}")
     return mode
+
+
+def materials_of(objects):
+    """The distinct materials in the material slots of ``objects``, in slot order."""
+    found = {}
+    for obj in objects:
+        for slot in getattr(obj, "material_slots", ()):
+            if slot.material is not None:
+                found.setdefault(slot.material.name_full, slot.material)
+    return list(found.values())
+
+
+def objects_without_material(objects):
+    """Names of the ``objects`` that could have materials but have none in any slot."""
+    return [
+        obj.name for obj in objects
+        if hasattr(getattr(obj, "data", None), "materials")
+        and not any(slot.material is not None for slot in obj.material_slots)
+    ]
 
 
 def apply_to_materials(materials, scene, mode=DEFAULT_MODE):

@@ -24,25 +24,6 @@ def objects_for_target(context, target):
     return list(context.scene.objects)
 
 
-def materials_of(objects):
-    """The distinct materials in the material slots of ``objects``, in slot order."""
-    found = {}
-    for obj in objects:
-        for slot in getattr(obj, "material_slots", ()):
-            if slot.material is not None:
-                found.setdefault(slot.material.name_full, slot.material)
-    return list(found.values())
-
-
-def objects_without_material(objects):
-    """Names of the ``objects`` that could have materials but have none in any slot."""
-    return [
-        obj.name for obj in objects
-        if hasattr(getattr(obj, "data", None), "materials")
-        and not any(slot.material is not None for slot in obj.material_slots)
-    ]
-
-
 def bare_objects_note(names, limit=3):
     """"N object(s) have no material (a, b, ...): give them a material first", or ""."""
     if not names:
@@ -146,8 +127,8 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
     def execute(self, context):
         scene = context.scene
         objects = objects_for_target(context, scene.sh_lighting.apply_target)
-        mats = materials_of(objects)
-        bare = bare_objects_note(objects_without_material(objects))
+        mats = materials.materials_of(objects)
+        bare = bare_objects_note(materials.objects_without_material(objects))
         if not mats and bare:
             self.report({"WARNING"}, f"SH lighting applied to no material: {bare}")
             return {"CANCELLED"}
@@ -181,7 +162,7 @@ class SHLIGHT_OT_remove(bpy.types.Operator):
 
     def execute(self, context):
         scene = context.scene
-        mats = materials_of(objects_for_target(context, scene.sh_lighting.apply_target))
+        mats = materials.materials_of(objects_for_target(context, scene.sh_lighting.apply_target))
         try:
             result = materials.remove_from_materials(mats)
         except (LookupError, ValueError) as error:

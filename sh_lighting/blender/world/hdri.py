@@ -1,0 +1,100 @@
+"""An HDRI file read for its lighting: decoded by Blender, projected, its 9-term error
+estimated, its bright sources taken out as lights.
+
+The one pipeline of the command line's ``compute`` and ``batch`` (and of scripts): the file is
+decoded as Blender renders it (``images.load_image_pixels``), projected exactly onto the 9
+coefficients (``core.projection.project_equirect``, Ramamoorthi and Hanrahan 2001, eq. 10),
+and the 9-term irradiance (eq. 12-13) compared with the exact one at ``ERROR_NORMALS`` normals
+(``core.irradiance.error_estimate``).
+"""
+
+import os
+import sys
+import tempfile
+from contextlib import contextmanager
+from datetime import date
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from ...core.coefficients import check_coefficients
+from ...core.equirect import zero_nonfinite
+from ...core.irradiance import error_estimate
+from ...core.lights import extract_lights
+from ...core.projection import project_equirect
+from . import images
+
+# Normals at which an HDRI's 9-term irradiance is compared with the exact one (a Fibonacci
+# lattice): enough for a mean to ~1e-4, cheap next to loading the image.
+ERROR_NORMALS = 256
+
+
+class Hdri(NamedTuple):
+    """An HDRI file's ``pixels`` (H, W, 4) float32 (non-finite texels zeroed if asked), its
+    ``coefficients`` (9, 3) and its ``estimate`` ({"mean", "max"}, or None: a channel without
+    light)."""
+
+    path: Path
+    pixels: np.ndarray
+    coefficients: np.ndarray
+    estimate: dict | None
+
+
+@contextmanager
+def library_output_captured():
+    """Send what C libraries print on stderr (file descriptor 2) during the block to a
+    temporary file instead of the terminal ("EXR_ERR_READ_IO", "libpng error" beside the
+    caller's own one-line message); yields a function returning that text."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as capture:
+        os.dup2(capture.fileno(), 2)
+        try:
+            yield lambda: (capture.seek(0), capture.read().decode("utf-8", "replace"))[1]
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
+def read_hdri(path, nonfinite="raise"):
+    """The ``Hdri`` of the equirectangular image file at ``path``.
+
+    ``nonfinite``: "raise" refuses NaN/Inf texels (``core.equirect.NonFiniteError``), "zero"
+    treats them as black, in the projection and the estimate alike. A ValueError says why a
+    file cannot be read or projected.
+    """
+    with library_output_captured():
+        pixels = images.load_image_pixels(path)
+    if nonfinite == "zero":
+        pixels = zero_nonfinite(pixels)
+    coeffs = check_coefficients(project_equirect(pixels, nonfinite=nonfinite))
+    return Hdri(Path(path), pixels, coeffs, error_estimate(pixels, coeffs, ERROR_NORMALS))
+
+
+def hdri_metadata(hdri):
+    """The preset metadata of an ``Hdri``: its name, the file name (never a local absolute
+    path), today, and its error estimate when there is one."""
+    height, width = hdri.pixels.shape[:2]
+    metadata = {
+        "name": hdri.path.stem,
+        "source": hdri.path.name,
+        "mapping": [0.0, 0.0, 0.0],
+        "strength": 1.0,
+        "created": date.today().isoformat(),
+        "notes": f"Projected exactly from the {width}x{height} image.",
+    }
+    if hdri.estimate is not None:
+        metadata["error_estimate"] = hdri.estimate
+        metadata["notes"] += (
+            f" Error estimate at {ERROR_NORMALS} normals against the exact irradiance."
+        )
+    return metadata
+
+
+def hdri_lights(hdri, count):
+    """(``core.lights.Extraction``, the rest's (9, 3) coefficients): up to ``count`` compact
+    bright sources of the HDRI taken out as lights (``core.lights.extract_lights``)."""
+    extraction = extract_lights(hdri.pixels, count)
+    return extraction, check_coefficients(project_equirect(extraction.rest))

@@ -1,0 +1,107 @@
+"""``apply PRESET [BLEND]``: a preset's coefficients set on a .blend's scene and the SH node
+group applied to its materials, saved to a new file or in place."""
+
+from .options import add_mode, add_scene
+from .paths import blend_relative, check_new_file, input_file, refuse_inputs
+from .report import CommandError, say
+from .session import open_blend, open_file, pick_scene, save_blend
+
+HELP = "set a preset in a .blend and apply the SH node group to its materials"
+
+
+def add_arguments(p, prog):
+    p.description = (
+        "Set the scene's coefficients from PRESET and add the SH Irradiance node group to the "
+        "materials of all objects of the scene (or of --objects), then save to --out (a new "
+        "file) or over the input with --in-place.")
+    p.epilog = f"example:\n  {prog} apply forest.json shot.blend --out shot_sh.blend"
+    p.add_argument("preset", metavar="PRESET", help="SH Lighting preset (.json)")
+    p.add_argument("blend", metavar="BLEND", nargs="?",
+                   help=".blend file to change (under blender -P: default the open one)")
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--out", metavar="NEW.blend", help="save the result to this new file")
+    where.add_argument("--in-place", action="store_true", help="replace the input .blend")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+    p.add_argument("--objects", nargs="+", metavar="NAME",
+                   help="only the materials of these objects (default: every object)")
+    add_scene(p, "scene to change")
+    add_mode(p)
+    p.add_argument(
+        "--animation", choices=("refuse", "key", "clear"), default="refuse",
+        help="when the scene's sh_L.. coefficients or gains are keyframed or driven: refuse "
+        "(default, nothing saved), key the preset's values at the scene's current frame "
+        "(the rest of the animation kept; a driven one is refused), or clear their "
+        "animation so that the preset renders at every frame")
+
+
+def run(args):
+    from .. import api
+    from ..blender import scene_data
+    from ..blender.presets import files as preset_io
+    from ..blender.shading import materials
+
+    if args.blend is not None:
+        blend = input_file(args.blend, ".blend file", "give the .blend file to change")
+    else:
+        blend = open_file()
+    preset, coeffs = read_preset_argument(args.preset, blend)
+    out = blend if args.in_place else blend_relative(args.out, blend, "--out")
+    if not args.in_place:
+        refuse_inputs(out, "--out", {".blend file": blend},
+                      advice="use --in-place to replace it")
+        refuse_inputs(out, "--out", {"preset": preset})
+        check_new_file(out, args.overwrite, what="--out")
+    blend = open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
+    scene = pick_scene(args.scene)
+    objects = objects_to_apply(scene, args.objects)
+    provenance = preset_io.preset_provenance(preset, {})
+    try:
+        api.set_coefficients(scene, preset_io.from_preset_space(coeffs), provenance,
+                             args.animation.upper())
+    except api.AnimatedError as error:
+        raise CommandError(str(error).replace("(animation='KEY', ", "(")
+                           .replace("(animation='CLEAR', ", "(")) from None
+    note = scene_data.last_note()
+    if note:
+        say(f"SH lighting {note}")
+    result = api.apply_to_materials(materials.materials_of(objects), scene, args.mode)
+    for name, reason in result.skipped:
+        say(f"skipped material '{name}': {reason}")
+    for name in materials.objects_without_material(objects):
+        say(f"skipped object '{name}': it has no material (give it one to light it)")
+    if not result.changed:
+        raise CommandError(
+            f"no material was changed ({len(result.skipped)} skipped): nothing saved"
+        )
+    say(f"SH lighting applied to {len(result.changed)} material(s): "
+        + ", ".join(result.changed))
+    try:
+        save_blend(out, overwrite=args.in_place or args.overwrite)
+    except (OSError, RuntimeError) as error:
+        raise CommandError(f"could not save '{out}': {error}") from None
+    say(f"Saved {out}")
+    return 0
+
+
+def read_preset_argument(text, blend):
+    """(path, coefficients) of the PRESET argument (``//`` relative to ``blend``)."""
+    from ..blender.presets import files as preset_io
+    from ..formats.presets import PresetError
+
+    path = blend_relative(text, blend, "PRESET")
+    try:
+        return path, preset_io.read_preset_file(path)[0]
+    except (PresetError, OSError) as error:
+        raise CommandError(str(error)) from None
+
+
+def objects_to_apply(scene, names):
+    """The objects named ``names`` (all of the scene's when None), or a CommandError."""
+    if not names:
+        return list(scene.objects)
+    missing = [name for name in names if scene.objects.get(name) is None]
+    if missing:
+        raise CommandError(
+            f"no object(s) {', '.join(map(repr, missing))} in scene '{scene.name}'"
+        )
+    return [scene.objects[name] for name in names]

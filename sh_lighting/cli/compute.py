@@ -1,0 +1,168 @@
+"""``compute HDRI_OR_BLEND``: the 9 coefficients of an HDRI file or of a .blend's world,
+printed, optionally written as a preset or an interop file."""
+
+import math
+import time
+from pathlib import Path
+
+from ..choices import FILAMENT_FRAMES, FORMATS
+from .options import add_nonfinite, add_scene, positive
+from .paths import blend_relative, check_new_file, input_file, refuse_inputs, remove_own_leftovers
+from .report import CommandError, say
+from .session import open_blend, open_file, pick_scene
+
+HELP = "coefficients of an HDRI or of a .blend's world; print them, write a preset"
+NONFINITE_ADVICE = "repair the image, or pass --nonfinite zero to treat those texels as black"
+
+
+def add_arguments(p, prog):
+    p.description = (
+        "Project an equirectangular HDRI (EXR, HDR, any image Blender reads), or the world of "
+        "a .blend (read only, the file is not saved), onto the 9 lighting coefficients L_lm; "
+        "print them and optionally write a preset.")
+    p.epilog = f"example:\n  {prog} compute forest.exr --out forest.json"
+    p.add_argument("input", metavar="HDRI_OR_BLEND", nargs="?",
+                   help="equirectangular image file, or a .blend file (its scene's world); "
+                   "under blender -P it defaults to the open .blend")
+    p.add_argument("--out", metavar="PRESET", help="write the coefficients to this file")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+    p.add_argument("--format", choices=tuple(FORMATS), default="sh_lighting",
+                   help="file format of --out: sh_lighting (our preset JSON, the default), "
+                   "threejs (a LightProbe for three.js's ObjectLoader), gltf (a .gltf "
+                   "EXT_lights_image_based environment: irradiance coefficients and a "
+                   "specular cube prefiltered from the image, as Babylon.js reads it), "
+                   "filament (a cmgen-style sh.txt)")
+    frames = tuple(FILAMENT_FRAMES)
+    p.add_argument("--filament-frame", choices=frames, default=frames[0],
+                   help="axes of --format filament: cmgen (the default) lines up with what "
+                   "cmgen writes for the same equirect image (its specular KTX); gltf lines "
+                   "up with a glTF export of the Blender scene. Not windowed (cmgen's "
+                   "default is --sh-window=auto)")
+    p.add_argument("--capture-width", type=positive, metavar="N",
+                   help="width of the Cycles capture of a procedural world (default: the "
+                   "scene's setting, else 256)")
+    add_scene(p)
+    add_nonfinite(p)
+    p.add_argument(
+        "--lights", type=int, metavar="K", choices=range(0, 9),
+        help="take up to K (0-8) compact bright sources out of the world image as Sun lights "
+        "(printed); the coefficients (and --out) then hold the rest of the world")
+
+
+def run(args):
+    from ..blender.presets import files as preset_io
+    from ..blender.world.hdri import ERROR_NORMALS, hdri_metadata
+    from ..core.sh import coefficient_table
+
+    is_blend = args.input is None or Path(args.input).suffix.lower() == ".blend"
+    if args.input is not None:
+        hint = "give a .blend file" if is_blend else "give an HDRI image or a .blend file"
+        source = input_file(args.input, ".blend file" if is_blend else "HDRI", hint)
+    else:
+        source = open_file()
+    out = blend_relative(args.out, source if is_blend else open_file(), "--out")
+    if out is not None:
+        refuse_inputs(out, "--out", {".blend file" if is_blend else "HDRI": source})
+        check_new_file(out, args.overwrite, what="--out")
+    start = time.perf_counter()
+    if is_blend:
+        source, scene, coeffs, metadata = _world(args)
+        hdri = None
+        environment = preset_io.world_environment(scene) if args.format == "gltf" else None
+    else:
+        hdri = read_hdri_file(source, args.nonfinite)
+        coeffs, metadata, scene = hdri.coefficients, hdri_metadata(hdri), None
+        environment = (hdri.pixels, 1.0, None)
+        say(f"HDRI {source}")
+    if args.lights is not None:
+        coeffs, count = _lights(source, scene, hdri, args.lights)
+        metadata["notes"] = (metadata.get("notes", "") + f" {count} light(s) extracted: these "
+                             "coefficients hold the rest of the world.").strip()
+        metadata.pop("error_estimate", None)  # it was the whole world's
+    elapsed = time.perf_counter() - start
+    say("Lighting coefficients L_lm (raw radiance, Blender world axes, z up):")
+    for line in coefficient_table(coeffs):
+        say(line)
+    estimate = metadata.get("error_estimate")
+    if estimate is not None:
+        say(f"9-term irradiance error (fraction of the total light, {ERROR_NORMALS} normals): "
+            f"mean {100 * estimate['mean']:.2f} %, max {100 * estimate['max']:.2f} %")
+    say(f"Computed in {elapsed:.2f} s")
+    if out is not None:
+        remove_own_leftovers(out)
+        try:
+            path = preset_io.export_coefficients(
+                coeffs, out, args.format, args.overwrite, metadata, environment,
+                args.filament_frame,
+            )
+        except (OSError, ValueError) as error:
+            raise CommandError(str(error)) from None
+        say(f"Wrote {FORMATS[args.format][0]} {path}")
+    return 0
+
+
+def read_hdri_file(path, nonfinite):
+    """``blender.world.hdri.read_hdri`` of ``path``, its errors as one CommandError line."""
+    from ..blender.world.hdri import read_hdri
+    from ..core.equirect import NonFiniteError
+
+    try:
+        return read_hdri(path, nonfinite)
+    except NonFiniteError as error:
+        raise CommandError(
+            f"{path}: the image has {error.description}: {NONFINITE_ADVICE}"
+        ) from None
+    except ValueError as error:
+        raise CommandError(f"{path}: {error}") from None
+
+
+def _world(args):
+    """(.blend path, scene, coefficients, metadata) of the world of the .blend ``args.input``."""
+    from .. import api
+    from ..blender.presets import files as preset_io
+
+    source = open_blend(args.input)
+    scene = pick_scene(args.scene)
+    try:
+        coeffs = api.compute_from_world(scene, capture_width=args.capture_width)
+    except ValueError as error:
+        raise CommandError(f"{source}: {error}") from None
+    metadata = preset_io.scene_metadata(scene)
+    metadata["name"] = source.stem
+    origin = metadata.get("source")
+    how = f"image {origin}" if origin else "a Cycles capture"
+    metadata["notes"] = f"Computed from world '{scene.world.name}' of {source.name} ({how})."
+    say(f"World '{scene.world.name}' of {source} (scene '{scene.name}', from {how})")
+    return source, scene, coeffs, metadata
+
+
+def _lights(source, scene, hdri, count):
+    """Up to ``count`` lights out of ``hdri`` (``scene`` None) or the world of ``scene``;
+    prints them, returns the rest's (9, 3) coefficients and the number of lights."""
+    try:
+        if scene is None:
+            from ..blender.world.hdri import hdri_lights
+
+            extraction, coeffs = hdri_lights(hdri, count)
+            found = [(light.direction, light.angular_diameter, light.colour, light.strength,
+                      light.power_fraction) for light in extraction.lights]
+        else:
+            from .. import api
+
+            info = api.extract_lights(scene, count)
+            extraction, coeffs = info.extraction, info.coefficients
+            found = [(obj.rotation_euler.to_matrix().col[2][:], obj.data.angle,
+                      obj.data.color[:], obj.data.energy, light.power_fraction)
+                     for obj, light in zip((scene.objects[n] for n in info.lights),
+                                           extraction.lights)]
+    except ValueError as error:
+        raise CommandError(f"{source}: {error}") from None
+    for i, (direction, angle, colour, strength, share) in enumerate(found, 1):
+        d = ", ".join(f"{v:+.4f}" for v in direction)
+        c = ", ".join(f"{v:.4f}" for v in colour)
+        say(f"Light {i}: Sun toward ({d}), angle {math.degrees(angle):.2f}°, colour ({c}), "
+            f"strength {strength:.6g} W/m², {100 * share:.1f} % of the light")
+    (before, _), (after, _) = extraction.errors[0], extraction.errors[-1]
+    say(f"{len(found)} light(s) extracted: mean irradiance error {100 * before:.2f} % with SH "
+        f"alone, {100 * after:.2f} % with SH + lights (fraction of the total light)")
+    return coeffs, len(found)

@@ -1,0 +1,63 @@
+"""The .blend a command works on: opened (or the one Blender has open), its scene, saved."""
+
+from pathlib import Path
+
+from ..formats.atomic import atomic_destination
+from .paths import input_file, remove_own_leftovers
+from .report import CommandError
+
+
+def open_file():
+    """The path of the .blend Blender has open (under ``blender file.blend -P``), or None."""
+    import bpy
+
+    return Path(bpy.data.filepath) if bpy.data.filepath else None
+
+
+def open_blend(path, load_ui=False):
+    """Open the .blend at ``path`` (None: keep the file Blender has open); returns its path.
+
+    ``load_ui``: also load its workspaces and screens (a file that is saved again keeps the
+    user's layout).
+    """
+    import bpy
+
+    if path is None:
+        if not bpy.data.filepath:
+            raise CommandError(
+                "no .blend given and none is open: pass the .blend file as an argument"
+            )
+        return Path(bpy.data.filepath)
+    path = input_file(path, ".blend file", "give a .blend file")
+    try:
+        bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=load_ui)
+    except RuntimeError as error:
+        raise CommandError(f"Blender could not open '{path}': {error}") from None
+    return path
+
+
+def pick_scene(name):
+    """The scene called ``name``, or the file's active scene."""
+    import bpy
+
+    if name is None:
+        scene = bpy.context.scene
+        if scene is None:
+            raise CommandError("the file has no scene")
+        return scene
+    scene = bpy.data.scenes.get(name)
+    if scene is None:
+        names = ", ".join(s.name for s in bpy.data.scenes)
+        raise CommandError(f"no scene '{name}' in the file (scenes: {names})")
+    return scene
+
+
+def save_blend(path, overwrite):
+    """Save the open file as ``path`` atomically (a copy: the session keeps its file path)."""
+    import bpy
+
+    remove_own_leftovers(path)
+    with atomic_destination(path, overwrite, suffix=".blend", what=".blend file",
+                            hint="pass --overwrite") as temporary:
+        bpy.ops.wm.save_as_mainfile(filepath=str(temporary), copy=True)
+    return Path(path)
