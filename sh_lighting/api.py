@@ -50,6 +50,8 @@ from .blender.presets.files import (  # presets and interop: JSON, three.js, glT
 )
 from .blender.shading import materials as _materials
 from .blender.shading import nodes as _nodes
+from .blender.transfer import apply as _transfer_apply
+from .blender.transfer import bake as _transfer
 from .blender.world import compute as _compute
 from .blender.world import reader as _world
 from .formats.presets import PresetError
@@ -69,7 +71,43 @@ __all__ = [
     "DesignError", "rotate", "match_mapping", "exposure", "saturation", "band_gains",
     "flip_vertical", "apply_window", "split_sun", "describe", "negative_warning",
     "extract_lights",
+    # precomputed radiance transfer (shadows and bounce light)
+    "TransferError", "bake_transfer", "transfer_status", "apply_transfer", "delete_transfer",
 ]
+
+TransferError = _transfer.TransferError
+
+
+def bake_transfer(scene, objects, samples=_transfer.DEFAULT_SAMPLES, report=print):
+    """Bake the transfer T_lm (Sloan, Kautz and Snyder 2002) of the meshes ``objects`` in
+    ``scene`` with Cycles: per face corner, the irradiance each SH basis function gives
+    through the scene's shadows and interreflection, stored in the meshes' colour attributes
+    sh_T00 ... sh_T22. ``report(text)`` gets a line per basis function with its time.
+    Returns a ``BakeInfo`` (objects, corners, vertices, samples, seconds, basis_seconds,
+    notes); a ``TransferError`` (nothing changed) for objects that cannot be baked
+    (modifiers, linked duplicates, no faces, not meshes, hidden)."""
+    return _transfer.bake_transfer(scene, objects, samples, report)
+
+
+def transfer_status(scene, obj):
+    """(state, message) of ``obj``'s bake: "NONE", "OK" or "STALE" (edited, moved, or the
+    scene's objects changed since the bake: bake again)."""
+    return _transfer.status(scene, obj)
+
+
+def apply_transfer(objects, scene=None, mode="KEEP_BSDF"):
+    """Light the materials of the baked ``objects`` by the "SH Transfer" group (mode
+    "KEEP_BSDF" or "EMISSION", as ``apply_to_materials``); returns (changed, skipped).
+    ``remove_from_materials`` takes it out again."""
+    return _transfer_apply.apply_transfer(objects, scene or bpy.context.scene, mode)
+
+
+def delete_transfer(obj):
+    """Take the transfer out of ``obj``'s materials and delete its transfer attributes and
+    record; True if it had any."""
+    _transfer_apply.remove_transfer_from(
+        [slot.material for slot in obj.material_slots if slot.material is not None])
+    return _transfer.remove_transfer(obj)
 
 
 def extract_lights(scene, count=3, error_target=None):

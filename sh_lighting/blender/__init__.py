@@ -9,8 +9,12 @@ from .ui import design as design_ui
 from .ui import lights as lights_ui
 from .ui import operators, panels
 from .ui import presets as presets_ui
+from .ui import transfer as transfer_ui
 
-MODULES = (preferences, properties, operators, panels, presets_ui, design_ui, lights_ui, command)
+MODULES = (
+    preferences, properties, operators, panels, presets_ui, design_ui, lights_ui, transfer_ui,
+    command,
+)
 
 
 def register():

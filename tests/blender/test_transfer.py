@@ -209,3 +209,25 @@ def test_a_saved_bake_renders_without_the_add_on(tmp_path):
     mask = _object_mask(alpha)
     assert np.abs(there[mask] - here[mask]).max() <= 1e-6
     assert here[mask].min() > 0.0
+
+
+def test_api_bakes_applies_and_deletes_in_background():
+    from sh_lighting import api
+
+    scene, ground, box = _scene(2, 0)
+    lines = []
+    info = api.bake_transfer(scene, [ground, box], samples=4, report=lines.append)
+    assert info.vertices == len(ground.data.vertices) + len(box.data.vertices)
+    assert [line.split(":")[0] for line in lines] == [f"Transfer {n}" for n in (
+        "L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22")]
+    assert api.transfer_status(scene, ground)[0] == "OK"
+    changed, skipped = api.apply_transfer([ground, box], scene, mode="EMISSION")
+    assert changed == ["Grey"] and skipped == []
+    with pytest.raises(ValueError, match="unknown transfer mode 'SHADOW'"):
+        api.apply_transfer([ground], scene, mode="SHADOW")
+    assert api.delete_transfer(ground) is True
+    assert api.transfer_status(scene, ground)[0] == "NONE"
+    with pytest.raises(api.TransferError, match="'Box' shares its mesh with 'Copy'"):
+        copy = bpy.data.objects.new("Copy", box.data)
+        scene.collection.objects.link(copy)
+        api.bake_transfer(scene, [box])

@@ -14,7 +14,10 @@ already holds the surface's orientation, shadows and interreflection (a normal m
 not in it). On an object without the attributes (never baked) the Attribute nodes read 0, so
 the group gives no light: Apply in this mode only to materials of baked objects.
 
-Outputs: Irradiance (E), Diffuse (Albedo · E / π), Shader (Emission of Diffuse, strength 1).
+Outputs: Irradiance (E), Diffuse (Albedo · E / π), Shader (Emission of Diffuse, strength 1
+for every ray but diffuse ones: the bounce between baked surfaces is in T_lm already, so
+diffuse rays do not see this emission; an unbaked diffuse object therefore gets no bounce
+light from baked ones).
 """
 
 from math import pi
@@ -90,7 +93,14 @@ def _build_nodes(tree):
     diffuse.inputs["Scale"].default_value = 1.0 / pi
     emission = b.node("ShaderNodeEmission", 8, 8)
     b.link(diffuse.outputs["Vector"], emission.inputs["Color"])
-    emission.inputs["Strength"].default_value = 1.0
+    # Strength 1 − Is Diffuse Ray: T_lm already holds the interreflection, so diffuse rays
+    # arriving from other surfaces must not see this light again (in "KEEP_BSDF" the BSDF
+    # would count it twice); camera, glossy and transmission rays see it.
+    light_path = b.node("ShaderNodeLightPath", 6, 9)
+    strength = b.math("SUBTRACT", 7, 9, "1 − diffuse ray")
+    strength.inputs[0].default_value = 1.0
+    b.link(light_path.outputs["Is Diffuse Ray"], strength.inputs[1])
+    b.link(strength.outputs[0], emission.inputs["Strength"])
     group_out = b.node("NodeGroupOutput", 9, 7)
     b.link(total, group_out.inputs["Irradiance"])
     b.link(diffuse.outputs["Vector"], group_out.inputs["Diffuse"])

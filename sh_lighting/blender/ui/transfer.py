@@ -1,0 +1,174 @@
+"""Transfer in the UI: Bake Transfer, Apply Transfer, Delete Transfer and the "Transfer
+(Shadows)" sub-panel. The logic is ``blender.transfer``; nothing here bakes or writes data
+itself."""
+
+import bpy
+
+from ..transfer import apply as transfer_apply
+from ..transfer import bake
+from . import panels
+from .operators import materials_of, objects_for_target
+from .polls import coefficients_poll, scene_poll
+
+MODE_ITEMS = (
+    ("KEEP_BSDF", "Keep BSDF",
+     "Keep the material's BSDF (lamps, shadows, reflections); the transfer replaces the "
+     "world's diffuse light (Cycles)"),
+    ("EMISSION", "Emission Only",
+     "The transfer alone drives the surface: shadows and bounce light, noise free at one "
+     "sample; no lamps or reflections"),
+)
+
+
+def _selected_meshes(context):
+    return [o for o in (context.selected_objects or ()) if o.type == "MESH"]
+
+
+class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
+    """Bake the selected meshes' transfer with Cycles: how much of each of the nine SH terms
+    reaches each face corner through the scene's shadows and bounce light"""
+
+    bl_idname = "shlight.bake_transfer"
+    bl_label = "Bake Transfer"
+    bl_options = {"REGISTER", "UNDO"}
+
+    samples: bpy.props.IntProperty(
+        name="Samples", default=bake.DEFAULT_SAMPLES, min=1, max=bake.MAX_SAMPLES,
+        soft_max=1024,
+        description="Cycles samples per face corner and basis function (noise falls as "
+                    "1/sqrt(samples))")
+
+    @classmethod
+    def poll(cls, context):
+        if not scene_poll(cls, context):
+            return False
+        if not _selected_meshes(context):
+            cls.poll_message_set("Select the meshes to bake")
+            return False
+        return True
+
+    def invoke(self, context, event):
+        return context.window_manager.invoke_props_dialog(self)
+
+    def execute(self, context):
+        objects = _selected_meshes(context)
+        try:
+            info = bake.bake_transfer(context.scene, objects, self.samples,
+                                      report=lambda text: self.report({"INFO"}, text))
+        except (bake.TransferError, RuntimeError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        per_10k = info.seconds / max(info.vertices, 1) * 1e4
+        self.report({"INFO"}, (
+            f"Baked the transfer of {len(info.objects)} object(s): {info.vertices} vertices, "
+            f"{info.corners} corners, {info.samples} samples, {info.seconds:.1f} s "
+            f"({per_10k:.1f} s per 10k vertices)"))
+        for note in info.notes:
+            self.report({"WARNING"}, note)
+        return {"FINISHED"}
+
+
+class SHLIGHT_OT_apply_transfer(bpy.types.Operator):
+    """Light the baked objects' materials by the transfer: the SH lighting with the baked
+    shadows and bounce light, still edited live by the coefficients"""
+
+    bl_idname = "shlight.apply_transfer"
+    bl_label = "Apply Transfer"
+    bl_options = {"REGISTER", "UNDO"}
+
+    mode: bpy.props.EnumProperty(name="Mode", items=MODE_ITEMS, default="KEEP_BSDF",
+                                 description="How the transfer joins the material")
+
+    @classmethod
+    def poll(cls, context):
+        if not coefficients_poll(cls, context):
+            return False
+        target = context.scene.sh_lighting.apply_target
+        if not transfer_apply.baked_objects(objects_for_target(context, target)):
+            cls.poll_message_set("No baked object to apply to: bake the transfer first")
+            return False
+        return True
+
+    def execute(self, context):
+        scene = context.scene
+        objects = objects_for_target(context, scene.sh_lighting.apply_target)
+        try:
+            result = transfer_apply.apply_transfer(objects, scene, self.mode)
+        except ValueError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        shown = "; ".join(f"{name}: {reason}" for name, reason in result.skipped[:3])
+        if not result.changed:
+            self.report({"WARNING"}, f"No material changed. {shown}")
+            return {"CANCELLED"}
+        text = f"Transfer applied to {len(result.changed)} material(s)"
+        self.report({"WARNING" if result.skipped else "INFO"},
+                    text + (f"; skipped {len(result.skipped)}: {shown}" if shown else ""))
+        return {"FINISHED"}
+
+
+class SHLIGHT_OT_delete_transfer(bpy.types.Operator):
+    """Delete the selected objects' transfer bake (its attributes), and take the transfer out
+    of their materials"""
+
+    bl_idname = "shlight.delete_transfer"
+    bl_label = "Delete Transfer"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if not scene_poll(cls, context):
+            return False
+        if not any(bake.record(o) for o in _selected_meshes(context)):
+            cls.poll_message_set("No selected object has a transfer bake")
+            return False
+        return True
+
+    def execute(self, context):
+        objects = [o for o in _selected_meshes(context) if bake.record(o)]
+        transfer_apply.remove_transfer_from(materials_of(objects))
+        for obj in objects:
+            bake.remove_transfer(obj)
+        self.report({"INFO"}, f"Deleted the transfer of {len(objects)} object(s)")
+        return {"FINISHED"}
+
+
+def transfer_lines(scene, active):
+    """What the panel says: [(icon, text)] for the active object and the scene's bakes."""
+    baked = [o for o in scene.objects if o.type == "MESH" and bake.record(o) is not None]
+    if not baked:
+        return [("INFO", "No transfer baked: select meshes and bake")]
+    scene_print = bake.scene_fingerprint(scene)
+    states = {o.name: bake.status(scene, o, scene_print) for o in baked}
+    stale = [name for name, (state, _message) in states.items() if state == "STALE"]
+    lines = []
+    if active is not None and active.name in states:
+        state, message = states[active.name]
+        lines.append(("ERROR" if state == "STALE" else "CHECKMARK", message))
+    lines.append(("ERROR" if stale else "INFO",
+                  f"{len(baked)} baked, {len(stale)} stale"
+                  + (f": {', '.join(stale[:3])}" if stale else "")))
+    return lines
+
+
+def draw_transfer(layout, context):
+    scene = context.scene
+    row = layout.row(align=True)
+    row.operator(SHLIGHT_OT_bake_transfer.bl_idname, icon="RENDER_STILL")
+    row.operator(SHLIGHT_OT_delete_transfer.bl_idname, text="", icon="TRASH")
+    layout.operator(SHLIGHT_OT_apply_transfer.bl_idname, icon="MATERIAL")
+    for icon, text in transfer_lines(scene, context.active_object):
+        panels.wrapped(layout, context, text, icon=icon)
+
+
+SHLIGHT_PT_world_transfer, SHLIGHT_PT_view3d_transfer = panels.sub_panels(
+    "transfer", "Transfer (Shadows)", draw_transfer, options=("DEFAULT_CLOSED",))
+
+classes = (
+    SHLIGHT_OT_bake_transfer,
+    SHLIGHT_OT_apply_transfer,
+    SHLIGHT_OT_delete_transfer,
+    SHLIGHT_PT_world_transfer,
+    SHLIGHT_PT_view3d_transfer,
+)
+register, unregister = bpy.utils.register_classes_factory(classes)
