@@ -7,7 +7,8 @@ import bpy
 from ..transfer import apply as transfer_apply
 from ..transfer import bake
 from . import panels
-from .operators import materials_of, objects_for_target
+from ..shading.materials import materials_of
+from .operators import objects_for_target
 from .polls import coefficients_poll, scene_poll
 
 MODE_ITEMS = (
