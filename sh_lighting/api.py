@@ -19,13 +19,14 @@ Besides computing, storing and applying coefficients, the API re-exports the pre
 (``export_preset``, ``import_preset``, ``shipped_presets``, ``user_presets``,
 ``save_user_preset``, ``remove_user_preset``; formats in ``FORMATS``) and the lighting-design
 edits (``rotate``, ``match_mapping``, ``exposure``, ``saturation``, ``band_gains``,
-``flip_vertical``, ``apply_window``, ``split_sun``, ``describe``, ``negative_warning``).
+``flip_vertical``, ``apply_window``, ``describe``, ``negative_warning``) and the lights
+(``extract_lights``; ``split_sun`` is ``extract_lights`` with one light).
 """
 
 import bpy
 
 from .blender import scene_data as _scene_data
-from .blender.design.edits import (  # lighting design: exact edits, windows, the sun split
+from .blender.design.edits import (  # lighting design: exact edits and windows
     DesignError,
     apply_window,
     band_gains,
@@ -36,7 +37,6 @@ from .blender.design.edits import (  # lighting design: exact edits, windows, th
     negative_warning,
     rotate,
     saturation,
-    split_sun,
 )
 from .blender.design import lights as _lights
 from .blender.presets.files import (  # presets and interop: JSON, three.js, glTF, Filament
@@ -110,13 +110,20 @@ def delete_transfer(obj):
     return _transfer.remove_transfer(obj)
 
 
-def extract_lights(scene, count=3, error_target=None):
+def extract_lights(scene, count=3, error_target=None, size_limit=_lights.SIZE_LIMIT):
     """Take up to ``count`` compact bright sources of the world image out as Sun lights and
-    store the coefficients of the rest (``blender.lights``); an ``error_target`` (fraction of
-    the world's light) stops earlier. The rest also becomes the Reset values; earlier extracted
-    lights are updated or deleted, and Compute from World deletes them. Returns a
-    ``LightsInfo``."""
-    return _lights.extract_lights(scene, count, error_target)
+    store the coefficients of the rest (``blender.design.lights``); an ``error_target``
+    (fraction of the world's light) stops earlier; sources wider than ``size_limit`` (radians
+    across) stay in the SH. The rest also becomes the Reset values; the lights it made earlier
+    (never an artist's, nor a duplicate of one) are updated or deleted, and Compute from World
+    deletes them. Returns a ``LightsInfo`` (``.report()``: one line saying what was found and
+    why not more)."""
+    return _lights.extract_lights(scene, count, error_target, size_limit)
+
+
+def split_sun(scene):
+    """The world image's sun as one Sun light: ``extract_lights(scene, count=1)``."""
+    return extract_lights(scene, count=1)
 
 
 def compute_from_world(scene, capture_width=None):

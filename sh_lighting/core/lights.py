@@ -1,14 +1,25 @@
 """Extracting lights from an HDRI: up to k compact bright sources as distant lights, 9 SH
-terms for the rest (generalising ``sun``'s single-sun split).
+terms for the rest (k = 1 is the old Split Sun: the sun as a Sun light).
 
-Nine terms blur every small bright source into a broad lobe (docs/reference.md §2); a sun, a
-window or a softbox is better rendered as a real light (sharp falloff, shadows). The
-extraction is greedy: find the brightest compact source of what is left (``sun.detect_sun``:
-the region connected to the brightest texel above max(contrast × background, a fraction of
-the peak), within ``max_radius`` of its centre, carrying at least ``min_power_fraction`` of the
-map's power), take it out (its texels become min(L, B), B the median of the texels around
-it), and repeat, until ``count`` sources are out, none is left, or the error of SH + lights
-against brute force (eq. 1) is at most ``error_target``.
+Nine terms blur every small bright source into a broad lobe and ring behind it
+(docs/reference.md §2); a sun, a window or a softbox is better rendered as a real light
+(sharp falloff, shadows). The extraction is greedy. On the luminance Y (RGB weights of the
+pixels' space, Rec.709's by default) of an equirect map (rows top to bottom, Blender's
+mapping, see ``equirect``), with b the solid-angle-weighted median of Y over the sphere (the
+map's background level) and P_Y = Σ Y dΩ its luminance power:
+
+1. the peak is the brightest texel of what is left; there is no source unless
+   Y_peak ≥ ``contrast`` × b;
+2. the source is the set of texels connected to the peak (8-neighbours, wrapping around in
+   longitude and across the poles) with Y > max(``contrast`` × b, ``peak_fraction`` × Y_peak);
+3. it is taken only if every texel lies within ``max_radius`` of its centre (a compact
+   source; suns clipped flat in the HDRI have their peak anywhere in the disc), its power is
+   at least ``min_power_fraction`` × P_Y, and taking it lowers the mean error of SH + lights
+   against brute force (eq. 1);
+4. its texels become min(L, B) per channel, B the per-channel median of the texels around it;
+
+and this repeats until ``count`` sources are out, none is left (``Extraction.stop`` says why),
+or the mean error is at most ``error_target``.
 
 Each source becomes a distant light: a Blender Sun of angular diameter 2 arccos(1 − Ω/2π)
 (Ω the region's solid angle). What it carries is exactly what was taken out of the map,
@@ -18,31 +29,49 @@ s = m_Y/|m_Y| (luminance) and its irradiance facing it is S·C = m·s per channe
 rest + light equal to the map's irradiance wherever the source is fully above the horizon
 (near its horizon the light's disc and the texels' shape differ; a 10° source spreads over
 ±5° there). The SH coefficients are those of the remaining map, so nothing is counted twice:
-E(n) ≈ E_9(rest) + Σ_k S_k C_k max(n·s_k, 0).
+E(n) ≈ E_9(rest) + Σ_k S_k C_k max(n·s_k, 0). A Blender Sun of strength S and colour C gives
+irradiance S·C on a surface facing it: ``strength`` and ``colour`` are set so that S·C is that
+irradiance, with max(C) = 1.
 
 Large sources are Sun lights too (a distant disc is what the world is: an area light would
 give a position-dependent irradiance and so not equal the world's).
+
+Errors are |E − E_ref| over the normals as a fraction of each channel's power (the paper's
+measure), the worst channel's; a channel without light (P ≤ 0: a map with no blue, a black
+map) has no relative error and is left out, so such maps extract like any other.
+``eevee_style_split`` imitates EEVEE's own world sun extraction, for comparison.
 """
 
 from dataclasses import dataclass
-from math import pi
+from math import degrees, pi
 
 import numpy as np
 
 from .edits import LUMINANCE
-from .equirect import check_finite_pixels, check_pixels, texel_directions, texel_solid_angles
-from .irradiance import irradiance, relative_error, total_power
+from .equirect import (
+    check_finite_pixels,
+    check_pixels,
+    row_edges,
+    texel_directions,
+    texel_solid_angles,
+)
+from .irradiance import irradiance, total_power
 from .projection import project_equirect
 from .sh import spread_normals
-from .sun import detect_sun, remove_sun, weighted_median
 from .world_map import equirect_irradiance
 
 MAX_COUNT = 8  # lights an extraction may make at most
 CONTRAST = 20.0  # a source's peak: this many times the map's (median) background level
 PEAK_FRACTION = 0.05  # its region: texels above this fraction of its peak
 MAX_RADIUS = np.radians(12.0)  # it fits within this angle of its centre
+LARGEST_RADIUS = np.radians(60.0)  # the largest max_radius accepted
 MIN_POWER_FRACTION = 0.01  # and carries at least this share of the map's power
 ERROR_NORMALS = 512  # normals at which the error target is checked (Fibonacci lattice)
+EEVEE_SUN_THRESHOLD = 10.0  # Blender's default World.sun_threshold
+
+# Why an extraction stopped (``Extraction.stop_kind``)
+COUNT, TARGET, DARK, CONTRAST_LOW, TOO_LARGE, TOO_DIM, NO_GAIN = (
+    "COUNT", "TARGET", "DARK", "CONTRAST", "TOO_LARGE", "TOO_DIM", "NO_GAIN")
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,13 +99,38 @@ class Light:
 class Extraction:
     """lights: list of ``Light``, brightest first; rest: the map without them (H, W, C);
     coefficients: (9, 3) L_lm of ``rest``; errors: [(mean, max)] of SH + the first i lights
-    vs brute force for i = 0 .. len(lights), fractions of the map's power (``relative_error``).
+    vs brute force for i = 0 .. len(lights), fractions of the map's power (module docstring).
+    stop_kind: why no further light was taken (``COUNT``, ``TARGET``, ``DARK``,
+    ``CONTRAST_LOW``, ``TOO_LARGE``, ``TOO_DIM``, ``NO_GAIN``); stop: the same for the user, one
+    phrase with the numbers; max_radius: the size limit used (radians).
     """
 
     lights: list
     rest: np.ndarray
     coefficients: np.ndarray
     errors: list
+    stop_kind: str
+    stop: str
+    max_radius: float
+
+
+def weighted_median(values, weights):
+    """The value at which the cumulative weight reaches half the total."""
+    order = np.argsort(values, axis=None)
+    cumulative = np.cumsum(np.broadcast_to(weights, values.shape).ravel()[order])
+    return float(values.ravel()[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
+
+
+def relative_errors(estimate, reference, power):
+    """(mean, max) of |E − E_ref| / P over the channels with light (P > 0): the worst
+    channel's mean over the normals and the largest value (Ramamoorthi and Hanrahan's
+    measure); (0, 0) when no channel has light."""
+    p = np.asarray(power, dtype=np.float64)
+    lit = p > 0.0
+    if not lit.any():
+        return 0.0, 0.0
+    err = np.abs(np.asarray(estimate, float) - reference)[:, lit] / p[lit]
+    return float(err.mean(axis=0).max()), float(err.max())
 
 
 def light_irradiance(lights, normals):
@@ -88,22 +142,102 @@ def light_irradiance(lights, normals):
     return total
 
 
-def _as_light(sun, pixels, total_luminance, luminance):
-    """The ``Light`` carrying exactly the texels ``sun`` takes out of ``pixels``."""
-    height, width = sun.mask.shape
-    rgb = pixels[..., :3].astype(np.float64)[sun.mask]
-    excess = (rgb - np.minimum(rgb, sun.background)) * texel_solid_angles(height, width)[
-        np.nonzero(sun.mask)[0], None]
-    directions = texel_directions(height, width)[sun.mask]
+def _dilate(region, touches_top, touches_bottom):
+    """8-neighbour dilation on an equirect band of rows, wrapping in longitude and at the poles."""
+    out = region.copy()
+    out[1:] |= region[:-1]
+    out[:-1] |= region[1:]
+    rows = out.copy()
+    out |= np.roll(rows, 1, axis=1) | np.roll(rows, -1, axis=1)
+    half = region.shape[1] // 2
+    if touches_top:  # across the north pole: the texel half a turn away
+        out[0] |= np.roll(region[0], half)
+    if touches_bottom:
+        out[-1] |= np.roll(region[-1], half)
+    return out
+
+
+def _connected(mask, seed, touches_top, touches_bottom):
+    """The 8-connected component of ``mask`` that contains ``seed`` (row, column)."""
+    region = np.zeros_like(mask)
+    region[seed] = True
+    while True:
+        grown = _dilate(region, touches_top, touches_bottom) & mask
+        if np.array_equal(grown, region):
+            return region
+        region = grown
+
+
+def _find_source(rgb, lum, solid, contrast, background, min_power, total, peak_fraction,
+                 max_radius, luminance):
+    """The brightest compact source of ``rgb`` (H, W, 3) float64, luminance ``lum``, as
+    ((direction, moment (3, 3), power (3,), mask, background, Ω), None), or (None, (stop kind,
+    phrase)): steps 1-4 of the module docstring, ``background`` the map's level b,
+    ``min_power`` the least power (fraction × ``total``, the map's P_Y)."""
+    height, width = lum.shape
+    seed = np.unravel_index(np.argmax(lum), lum.shape)
+    peak = float(lum[seed])
+    floor = contrast * max(background, 0.0)
+    if not peak >= floor or peak <= 0.0:
+        ratio = f"{peak / background:.3g} ×" if background > 0.0 else "not"
+        return None, (CONTRAST_LOW, f"the brightest texel left is {ratio} brighter than the "
+                      f"background, less than {contrast:g} ×")
+    # Only rows that can hold texels within 2 max_radius of the peak are searched: a region cut
+    # off there spans more than 2 max_radius, so no centre has it within max_radius.
+    edges = row_edges(height)
+    theta = 0.5 * (edges[seed[0]] + edges[seed[0] + 1])
+    reach = 2.0 * max_radius + pi / height
+    r0 = int(np.searchsorted(edges, theta - reach, side="right")) - 1
+    r1 = int(np.searchsorted(edges, theta + reach, side="left"))
+    r0, r1 = max(r0, 0), min(r1, height)
+    band = slice(r0, r1)
+    limit = f"the size limit of {degrees(2.0 * max_radius):.0f}°"
+    region = _connected(lum[band] > max(floor, peak_fraction * peak), (seed[0] - r0, seed[1]),
+                        r0 == 0, r1 == height)
+    if (r0 > 0 and region[0].any()) or (r1 < height and region[-1].any()):
+        return None, (TOO_LARGE, f"the brightest source left is wider than {limit}")
+    ring = _dilate(_dilate(region, r0 == 0, r1 == height), r0 == 0, r1 == height) & ~region
+    fill = np.median(rgb[band][ring], axis=0) if ring.any() else np.zeros(3)
+    weights = np.broadcast_to(solid[band, None], region.shape)[region]
+    inside = rgb[band][region]
+    excess = (inside - np.minimum(inside, fill)) * weights[:, None]  # (N, 3) radiance × dΩ
+    power = excess.sum(axis=0)
+    share = float(power @ luminance) / total
+    if float(power @ luminance) < min_power or not share > 0.0:
+        return None, (TOO_DIM, f"the brightest source left carries {100 * share:.2g} % of the "
+                      f"light, less than {100 * min_power / total:.2g} %")
+    directions = texel_directions(height, width, band)[region]
     moment = excess.T @ directions  # (3 channels, 3): m per channel
-    luminance_moment = luminance @ moment
-    direction = luminance_moment / np.linalg.norm(luminance_moment)
+    toward = luminance @ moment
+    toward = toward / np.linalg.norm(toward)
+    spread = float(np.arccos(np.clip(directions @ toward, -1.0, 1.0)).max())
+    if spread >= max_radius:
+        return None, (TOO_LARGE, f"the brightest source left is {degrees(2 * spread):.3g}° "
+                      f"across, wider than {limit}")
+    mask = np.zeros((height, width), dtype=bool)
+    mask[band] = region
+    return (toward, moment, power, mask, fill, float(weights.sum())), None
+
+
+def _as_light(found, total, luminance):
+    """The ``Light`` carrying exactly the excess texels of the source ``found``."""
+    direction, moment, power, mask, background, omega = found
     rgb_irradiance = np.maximum(moment @ direction, 0.0)
     strength = float(rgb_irradiance.max())
-    power = excess.sum(axis=0)
-    return Light(direction, sun.angular_diameter, rgb_irradiance / strength, strength,
-                 rgb_irradiance, power, float(power @ luminance) / total_luminance,
-                 sun.mask, sun.background)
+    return Light(direction, float(2.0 * np.arccos(np.clip(1.0 - omega / (2.0 * pi), -1, 1))),
+                 rgb_irradiance / strength, strength, rgb_irradiance, power,
+                 float(power @ luminance) / total, mask, background)
+
+
+def remove_light(pixels, light):
+    """A copy of ``pixels`` with the light's texels set to min(L, ``light.background``), alpha
+    kept."""
+    a = check_pixels(pixels)
+    if a.shape[:2] != light.mask.shape:
+        raise ValueError(f"the light was found in a {light.mask.shape} map, not {a.shape[:2]}")
+    out = np.array(a, copy=True)
+    out[light.mask, :3] = np.minimum(out[light.mask, :3], light.background)
+    return out
 
 
 def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST,
@@ -113,7 +247,8 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
     docstring); stop early once the mean error of SH + lights is ≤ ``error_target`` (a
     fraction of the map's power, None: no target). Returns an ``Extraction``.
 
-    ``pixels``: (H, W, 3 or 4) linear radiance, rows top to bottom. ``normals``: where the
+    ``pixels``: (H, W, 3 or 4) linear radiance, rows top to bottom. ``max_radius``: the size
+    limit, radians from the source's centre (up to ``LARGEST_RADIUS``). ``normals``: where the
     errors are measured (default ``ERROR_NORMALS`` of a Fibonacci lattice). ``luminance``:
     the RGB weights of Y in the pixels' space (``core.colour.luminance_weights``; default
     Rec.709's).
@@ -125,53 +260,76 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
                          f"got {count!r}")
     if error_target is not None and not error_target > 0.0:
         raise ValueError(f"the error target must be a fraction above 0, got {error_target!r}")
+    if not 0.0 < max_radius <= LARGEST_RADIUS:
+        raise ValueError(f"the size limit must be above 0° and at most "
+                         f"{degrees(2 * LARGEST_RADIUS):.0f}° across, got "
+                         f"{degrees(2 * max_radius):g}°")
     n = spread_normals(ERROR_NORMALS) if normals is None else np.asarray(normals, float)
     height, width, _ = a.shape
     solid = texel_solid_angles(height, width)
     lum = a[..., :3].astype(np.float64) @ luminance
-    total_luminance = float((lum * solid[:, None]).sum())
+    total = float((lum * solid[:, None]).sum())
     background = weighted_median(lum, solid[:, None])
     reference = equirect_irradiance(a, n)
     rest = np.array(a, dtype=np.float32, copy=True)
     coeffs = project_equirect(rest)
     power = total_power(coeffs)
     lights = []
-    errors = [relative_error(irradiance(coeffs, n), reference, power)]
-    while len(lights) < count and (error_target is None or errors[-1][0] > error_target):
-        peak = float((rest[..., :3].astype(np.float64) @ luminance).max())
-        if peak < contrast * max(background, 0.0) or total_luminance <= 0.0:
+    errors = [relative_errors(irradiance(coeffs, n), reference, power)]
+    stop = (COUNT, f"{count} light(s) asked for")
+    while True:
+        if len(lights) >= count:
             break
-        # the peak-fraction threshold is relative to this source; the contrast to the map's
-        # background (and the power share to the whole map's power), not to what is left
-        sun = detect_sun(rest, contrast=contrast * background
-                         / max(_median(rest, solid, luminance), 1e-300),
-                         peak_fraction=peak_fraction, max_radius=max_radius,
-                         min_power_fraction=min_power_fraction * total_luminance
-                         / max(_luminance_power(rest, solid, luminance), 1e-300),
-                         luminance=luminance)
-        if sun is None:
+        if error_target is not None and errors[-1][0] <= error_target:
+            stop = (TARGET, f"the error target of {100 * error_target:.2g} % was reached")
             break
-        light = _as_light(sun, rest, total_luminance, luminance)
-        trial_rest = remove_sun(rest, sun)
+        if not total > 0.0:
+            stop = (DARK, "the image has no light")
+            break
+        rgb = rest[..., :3].astype(np.float64)
+        found, why = _find_source(rgb, rgb @ luminance, solid, contrast, background,
+                                  min_power_fraction * total, total, peak_fraction,
+                                  max_radius, luminance)
+        if found is None:
+            stop = why
+            break
+        light = _as_light(found, total, luminance)
+        trial_rest = remove_light(rest, light)
         trial = project_equirect(trial_rest)
         estimate = irradiance(trial, n) + light_irradiance([*lights, light], n)
-        error = relative_error(estimate, reference, power)
-        if error[0] >= errors[-1][0]:
-            break  # this source is better left to the SH (e.g. the halo around a sun)
+        error = relative_errors(estimate, reference, power)
+        if error[0] >= errors[-1][0]:  # e.g. the halo around a sun
+            stop = (NO_GAIN, f"the next source ({100 * light.power_fraction:.2g} % of the "
+                    f"light, {degrees(light.angular_diameter):.0f}° across) would not lower "
+                    "the error: it stays in the SH")
+            break
         lights.append(light)
         rest, coeffs = trial_rest, trial
         errors.append(error)
-    return Extraction(lights, rest, coeffs, errors)
+    return Extraction(lights, rest, coeffs, errors, stop[0], stop[1], float(max_radius))
 
 
-def _median(pixels, solid, luminance):
-    return weighted_median(pixels[..., :3].astype(np.float64) @ luminance, solid[:, None])
+def eevee_style_split(pixels, threshold=EEVEE_SUN_THRESHOLD):
+    """An imitation of EEVEE's world sun extraction: (sun irradiance (3,), direction, coeffs).
 
-
-def _luminance_power(pixels, solid, luminance):
-    return float(((pixels[..., :3].astype(np.float64) @ luminance) * solid[:, None]).sum())
-
-
-def angular_diameter_of(solid_angle):
-    """The angular diameter of a disc of ``solid_angle`` steradians: 2 arccos(1 − Ω/2π)."""
-    return float(2.0 * np.arccos(np.clip(1.0 - solid_angle / (2.0 * pi), -1.0, 1.0)))
+    Each texel is clamped so that its largest channel is at most ``threshold`` (keeping its
+    hue); what is clamped off goes into one sun whose irradiance is Σ (L − L_clamped) dΩ and
+    whose direction is the mean texel direction weighted by |L − L_clamped| dΩ (the Euclidean
+    length of the RGB excess); the clamped map becomes order-1 SH (l ≤ 1, 4 coefficients),
+    which is what EEVEE keeps for world diffuse light. Returns (zeros, None, coeffs) when no
+    texel exceeds the threshold.
+    """
+    a = check_pixels(pixels)
+    height, width, _ = a.shape
+    rgb = a[..., :3].astype(np.float64)
+    peak = np.abs(rgb).max(axis=-1)
+    scale = np.minimum(1.0, threshold / np.maximum(peak, 1e-300))
+    clamped = rgb * scale[..., None]
+    excess = (rgb - clamped) * texel_solid_angles(height, width)[:, None, None]
+    coeffs = project_equirect(clamped, max_order=1)
+    if not excess.any():
+        return np.zeros(3), None, coeffs
+    direction = np.linalg.norm(excess, axis=-1).ravel() @ texel_directions(height, width).reshape(
+        -1, 3
+    )
+    return excess.sum(axis=(0, 1)), direction / np.linalg.norm(direction), coeffs

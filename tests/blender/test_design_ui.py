@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from blender_files import SCRIPT, WORLD, write_exr
 from blender_scenes import (
-    EULER, STRENGTH, SUN_IMAGE_DIRECTION, SUN_RADIANCE, SUN_RGB, H, W, add_mapping,
+    EULER, STRENGTH, H, W, add_mapping,
     environment_world, run_execute, sky_map, sunny_map,
 )
 from numpy.testing import assert_allclose, assert_array_equal
@@ -23,11 +23,9 @@ import sh_lighting
 from sh_lighting.blender import compat, scene_data
 from sh_lighting.blender.design import edits as design
 from sh_lighting.blender.ui import design as design_ui, lights as lights_ui, panels, previews
-from sh_lighting.blender.world import compute
-from sh_lighting.blender.world.images import image_pixels
 from sh_lighting.blender.world.reader import world_coefficients
 from sh_lighting.core import edits, windowing
-from sh_lighting.core.equirect import texel_directions, texel_solid_angles
+from sh_lighting.core.equirect import texel_solid_angles
 from sh_lighting.core.irradiance import irradiance, reference_irradiance
 from sh_lighting.core.minimum import irradiance_minimum, mean_irradiance, negative_light_warning
 from sh_lighting.core.preview import (
@@ -36,8 +34,7 @@ from sh_lighting.core.preview import (
     irradiance_sphere_image,
     sphere_normals,
 )
-from sh_lighting.core.projection import project_equirect
-from sh_lighting.core.rotation import euler_xyz_matrix, rotate_coefficients
+from sh_lighting.core.rotation import euler_xyz_matrix
 from sh_lighting.core.sh import sh_basis
 from sh_lighting.core.sh import spread_normals
 from ui_layout import RecordingLayout
@@ -169,12 +166,6 @@ def test_edits_are_disabled_without_coefficients(addon, op):
     assert not scene_data.has_coefficients(bpy.context.scene)
 
 
-def test_split_sun_is_disabled_without_a_world(addon):
-    bpy.context.scene.world = None
-    with pytest.raises(RuntimeError, match="has no world"):
-        bpy.ops.shlight.split_sun()
-
-
 def test_describe_and_warning_read_the_lighting_with_its_gains(addon):
     """The panel's words and warning are of the lighting that renders, L = s·c, not of the
     channels alone: a gain the user dragged changes them."""
@@ -291,212 +282,6 @@ def test_window_cost_needs_an_image_world(addon):
     assert result.cost is None
     assert "not an equirectangular world image" in result.report()
     assert_array_equal(result.window, windowing.lanczos_window(2.0))
-
-
-# -- Split Sun ---------------------------------------------------------------------------------
-
-
-def sun_objects():
-    return [o for o in bpy.context.scene.objects if o.get(design.SUN_MARKER)]
-
-
-def minus_z(obj):
-    """The direction the light shines along: its object's −Z axis in world axes."""
-    bpy.context.view_layer.update()
-    return -np.array(obj.matrix_world.col[2][:3])
-
-
-def disc_direction(disc):
-    """The disc's mean direction (its texels weighted by solid angle), in the image."""
-    d = texel_directions(*disc.shape)[disc]
-    mean = solid_angles(disc) @ d
-    return mean / np.linalg.norm(mean)
-
-
-def test_split_sun_creates_one_sun_light_and_the_rest_as_coefficients(addon, tmp_path):
-    scene = bpy.context.scene
-    sky = sky_map()
-    pixels, disc = sunny_map(sky)
-    environment_world(scene, write_exr(tmp_path / "sun.exr", pixels), STRENGTH, EULER)
-    bpy.ops.ed.undo_push(message="before split")
-    assert bpy.ops.shlight.split_sun("EXEC_DEFAULT", True) == {"FINISHED"}
-
-    [obj] = sun_objects()
-    assert obj.name == design.SUN_NAME and obj.type == "LIGHT" and obj.data.type == "SUN"
-    assert obj.name in scene.collection.objects
-    lookup = euler_xyz_matrix(EULER)
-    assert np.degrees(np.arccos(disc_direction(disc) @ SUN_IMAGE_DIRECTION)) < 0.5
-    s = lookup.T @ disc_direction(disc)  # where the world shows the image's sun
-    # the light shines along its −Z: from the sun toward the scene
-    assert_allclose(minus_z(obj), -s, atol=1e-6)
-    omega = solid_angles(disc).sum()
-    assert obj.data.angle == pytest.approx(2.0 * math.acos(1.0 - omega / (2.0 * math.pi)),
-                                           rel=FLOAT32)
-    # irradiance it adds = what was taken out: the disc's excess over the sky, × Strength
-    removed = STRENGTH * SUN_RADIANCE * SUN_RGB * omega
-    assert_allclose(obj.data.energy * np.array(obj.data.color), removed, rtol=FLOAT32)
-    assert max(obj.data.color) == pytest.approx(1.0)
-    # the coefficients: the world without the disc, as Blender shows it
-    rest = rotate_coefficients(project_equirect(sky) * STRENGTH, lookup.T)
-    assert_allclose(stored(), rest, rtol=0, atol=1e-5 * np.abs(rest).max())
-    # the world without the sun is what Reset returns to (no sun in the coefficients again)
-    assert_allclose(scene_data.get_computed(scene), stored(), rtol=0, atol=1e-12)
-    assert scene_data.computed_provenance(scene)["sun"] == obj.name
-
-    bpy.ops.ed.undo()
-    assert not sun_objects()
-    assert not scene_data.has_coefficients(bpy.context.scene)
-
-
-def test_a_second_split_updates_the_same_light(addon, tmp_path):
-    scene = bpy.context.scene
-    pixels, _ = sunny_map()
-    environment_world(scene, write_exr(tmp_path / "sun.exr", pixels), STRENGTH)
-    first = design.split_sun(scene)
-    assert first.created
-    [obj] = sun_objects()
-    bpy.context.view_layer.update()
-    energy, matrix = obj.data.energy, np.array(obj.matrix_world)
-    obj.data.energy = 1.0
-    obj.rotation_euler = (0.0, 0.0, 0.0)
-    scene_data.store(scene, KNOWN, SCRIPT)
-
-    result, reports = run_execute(design_ui.SHLIGHT_OT_split_sun)
-    assert result == {"FINISHED"}
-    assert [o.name for o in sun_objects()] == [obj.name]
-    assert len(bpy.data.lights) == 1 and len(bpy.data.objects) == 1
-    assert obj.data.energy == pytest.approx(energy, rel=FLOAT32)
-    bpy.context.view_layer.update()
-    assert_allclose(np.array(obj.matrix_world), matrix, atol=1e-6)
-    assert_array_equal(stored(), KNOWN)  # split already: the values set since are kept
-    assert_array_equal(scene_data.get_computed(scene), first.coefficients)
-    [(kind, message)] = reports
-    assert kind == {"INFO"} and f"'{obj.name}' updated" in message
-
-
-def test_split_sun_keeps_earlier_edits_and_reset_gives_no_second_sun(addon, tmp_path):
-    scene = bpy.context.scene
-    sky = sky_map()
-    pixels, _disc = sunny_map(sky)
-    environment_world(scene, write_exr(tmp_path / "sun.exr", pixels), STRENGTH)
-    computed, _info = compute.compute_and_store(scene)
-    rest = project_equirect(sky) * STRENGTH  # the world without its sun
-    sun = computed - rest
-    assert sun[0].max() > rest[0].max()  # the sun holds most of the light
-    design.exposure(scene, 1.0)  # an edit before the split
-    design.split_sun(scene)
-    [obj] = sun_objects()
-    tolerance = 1e-5 * np.abs(computed).max()
-    assert_allclose(stored(), 2.0 * computed - sun, rtol=0, atol=tolerance)  # edit kept
-    assert scene_data.provenance(scene)["edit"] == "split_sun"
-    assert bpy.ops.shlight.reset() == {"FINISHED"}
-    assert_allclose(stored(), rest, rtol=0, atol=tolerance)  # the sun is in the lamp only
-    assert scene_data.provenance(scene)["sun"] == obj.name
-    design.split_sun(scene)  # again: the light is updated, the sun not taken out twice
-    assert_allclose(stored(), rest, rtol=0, atol=tolerance)
-    assert len(sun_objects()) == 1
-
-
-def test_split_sun_on_a_world_without_a_sun_changes_nothing(addon, tmp_path):
-    scene = bpy.context.scene
-    environment_world(scene, write_exr(tmp_path / "sky.exr", sky_map()), STRENGTH)
-    scene_data.store(scene, KNOWN, SCRIPT)
-    objects = len(bpy.data.objects)
-    result, reports = run_execute(design_ui.SHLIGHT_OT_split_sun)
-    assert result == {"FINISHED"}
-    assert reports == [({"INFO"}, "No sun found in the world image: nothing changed")]
-    assert bpy.ops.shlight.split_sun() == {"FINISHED"}
-    assert design.split_sun(scene) is None
-    assert_array_equal(stored(), KNOWN)
-    assert len(bpy.data.objects) == objects and not bpy.data.lights
-
-
-def test_split_sun_needs_an_image_world(addon):
-    plain_colour_world(bpy.context.scene)
-    with pytest.raises(RuntimeError, match="not an Environment Texture image"):
-        bpy.ops.shlight.split_sun()
-    assert not bpy.data.lights
-
-
-# Three planes tilted 30° toward azimuths 0°, 120°, 240°: their normals span 3-D, so their
-# brightness pins down the sun's direction, not only its elevation.
-TILT = math.radians(30.0)
-AZIMUTHS = np.radians([0.0, 120.0, 240.0])
-PLANE_SPACING = 1.2  # along X; camera pixels of 0.12
-PLANE_HALF_SIZE = 0.4
-# Cycles, 16 samples of a small sun, direct light only: measured within 5e-4 of the prediction;
-# a 1° error in the sun's direction changes the planes' brightness by 1 % to 3 %.
-RENDER_TOLERANCE = 2e-3
-
-
-def tilted_plane(index, material):
-    """A square centred at x = (index − 1) · PLANE_SPACING with unit normal n; returns n."""
-    a = AZIMUTHS[index]
-    n = np.array([math.sin(TILT) * math.cos(a), math.sin(TILT) * math.sin(a), math.cos(TILT)])
-    e1 = np.array([-math.sin(a), math.cos(a), 0.0])
-    e2 = np.cross(n, e1)  # e1 × e2 = n: counter-clockwise seen from the normal's side
-    c = np.array([(index - 1) * PLANE_SPACING, 0.0, 0.0])
-    h = PLANE_HALF_SIZE
-    corners = [c - h * e1 - h * e2, c + h * e1 - h * e2, c + h * e1 + h * e2, c - h * e1 + h * e2]
-    mesh = bpy.data.meshes.new(f"Plane{index}")
-    mesh.from_pydata([tuple(v) for v in corners], [], [(0, 1, 2, 3)])
-    mesh.materials.append(material)
-    bpy.context.scene.collection.objects.link(bpy.data.objects.new(mesh.name, mesh))
-    return n
-
-
-def white_diffuse():
-    material = bpy.data.materials.new("White")
-    tree = compat.ensure_node_tree(material)
-    tree.nodes.clear()
-    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    output = tree.nodes.new("ShaderNodeOutputMaterial")
-    tree.links.new(diffuse.outputs["BSDF"], output.inputs["Surface"])
-    return material
-
-
-def test_cycles_renders_the_split_sun_where_it_was(addon, tmp_path):
-    """White diffuse planes lit only by the created Sun show S·C·max(n·s, 0)/π (albedo 1)."""
-    scene = bpy.context.scene
-    pixels, _ = sunny_map()
-    environment_world(scene, write_exr(tmp_path / "sun.exr", pixels), STRENGTH, EULER)
-    info = design.split_sun(scene)
-    [sun] = sun_objects()
-
-    black = bpy.data.worlds.new("Black")
-    background = compat.ensure_node_tree(black).nodes["Background"]
-    background.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    background.inputs["Strength"].default_value = 0.0
-    scene.world = black
-    material = white_diffuse()
-    normals = np.array([tilted_plane(i, material) for i in range(3)])
-    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    camera.data.type, camera.data.ortho_scale = "ORTHO", 3.0 * PLANE_SPACING
-    camera.location = (0.0, 0.0, 3.0)  # looking down −Z, image X = world X
-    scene.collection.objects.link(camera)
-    scene.camera = camera
-
-    scene.render.engine = "CYCLES"
-    scene.cycles.device, scene.cycles.samples = "CPU", 16
-    scene.cycles.use_adaptive_sampling = scene.cycles.use_denoising = False
-    scene.cycles.max_bounces = 0  # direct light only: the planes see each other
-    scene.render.resolution_x, scene.render.resolution_y = 30, 10
-    scene.render.resolution_percentage = 100
-    scene.render.dither_intensity = 0.0
-    scene.view_settings.view_transform, scene.view_settings.look = "Standard", "None"
-    settings = scene.render.image_settings
-    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
-    scene.render.filepath = str(tmp_path / "render.exr")
-    bpy.ops.render.render(write_still=True)
-    rendered = image_pixels(bpy.data.images.load(str(tmp_path / "render.exr")))[..., :3]
-
-    cosines = normals @ info.direction
-    assert (cosines > 0.2).all()  # every plane faces the sun
-    per_cosine = sun.data.energy * np.array(sun.data.color) / math.pi
-    for index, cosine in enumerate(cosines):
-        centre = rendered[4:6, 10 * index + 4 : 10 * index + 6].reshape(-1, 3).mean(axis=0)
-        assert_allclose(centre, per_cosine * cosine, rtol=RENDER_TOLERANCE)
 
 
 # -- previews ----------------------------------------------------------------------------------

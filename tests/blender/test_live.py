@@ -87,7 +87,7 @@ WRITERS = {
     "flip": lambda scene, _t: bpy.ops.shlight.flip_vertical(),
     "window": lambda scene, _t: bpy.ops.shlight.window(kind="HANNING"),
     "match mapping": lambda scene, _t: design.match_mapping(scene),
-    "split sun": lambda scene, _t: bpy.ops.shlight.split_sun(),
+    "extract one light": lambda scene, _t: bpy.ops.shlight.extract_lights("EXEC_DEFAULT", count=1),
     "load preset": lambda scene, _t: bpy.ops.shlight.load_preset(filepath=str(FOREST)),
     "import preset": lambda scene, _t: bpy.ops.shlight.import_preset(filepath=str(FOREST)),
     "preset_io": lambda scene, _t: preset_io.import_preset(scene, FOREST),

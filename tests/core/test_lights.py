@@ -8,7 +8,7 @@ from sh_lighting.core.equirect import texel_directions, texel_solid_angles
 from sh_lighting.core.irradiance import irradiance, relative_error, total_power
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.sh import spread_normals
-from sh_lighting.core.sun import eevee_style_split
+from sh_lighting.core.lights import eevee_style_split
 from sh_lighting.core.world_map import equirect_irradiance
 
 HEIGHT, WIDTH = 128, 256
@@ -96,3 +96,24 @@ def test_count_zero_target_and_bad_arguments():
 def test_uniform_sky_has_no_light():
     result = core_lights.extract_lights(disc_world([]), count=3)
     assert result.lights == []
+
+
+def test_a_world_without_blue_and_a_black_world_extract():
+    """A channel with no light has no relative error: it is left out, not refused."""
+    pixels = disc_world(TWO_SUNS)
+    pixels[..., 2] = 0.0  # no blue anywhere
+    result = core_lights.extract_lights(pixels, count=2)
+    assert len(result.lights) == 2
+    for light in result.lights:
+        assert light.colour[2] == 0.0 and light.colour.max() == 1.0
+    # the errors are those of the red and green channels alone
+    normals = spread_normals(512)
+    truth = equirect_irradiance(pixels, normals)
+    power = total_power(project_equirect(pixels))[:2]
+    rebuilt = irradiance(result.coefficients, normals) + core_lights.light_irradiance(
+        result.lights, normals)
+    assert result.errors[-1] == pytest.approx(relative_error(rebuilt[:, :2], truth[:, :2], power))
+    assert result.errors[-1][0] < 0.1 * result.errors[0][0]
+    black = core_lights.extract_lights(np.zeros((HEIGHT, WIDTH, 3), np.float32), count=2)
+    assert black.lights == [] and black.errors == [(0.0, 0.0)]
+    assert black.stop_kind == core_lights.DARK and black.stop == "the image has no light"

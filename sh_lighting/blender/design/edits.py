@@ -6,7 +6,7 @@ and stores the result with ``scene_data.store`` (provenance: where the values ca
 with the edit; edits are not new Reset values). Errors are ValueError/LookupError with a message for the user; nothing is changed
 then. Angles are in radians, like everywhere in Blender's Python API.
 
-The world-reading tools (Match Mapping, the window's error against the world, Split Sun) need
+The world-reading tools (Match Mapping, the window's error against the world) need
 the world's Environment Texture image: they read it with ``world.read_world``, the reader
 Compute from World uses, so they see exactly what it sees (Strength and rotation as
 evaluated at the current frame, pixels decoded as Blender renders them).
@@ -14,28 +14,20 @@ evaluated at the current frame, pixels decoded as Blender renders them).
 
 from dataclasses import dataclass
 
-import bpy
 import numpy as np
-from mathutils import Matrix
 
 from ...core import edits, windowing
 from ...core.colour import luminance_weights
 from ...core.minimum import irradiance_minimum, negative_light_warning
 from ...core.rotation import rotate_coefficients
 from ...core.sh import spread_normals
-from ...core.sun import detect_sun, remove_sun
 from ...core.world_map import (
-    map_coefficients,
     map_irradiance,
     mapping_rotation,
-    sun_light_rotation,
-    to_world_direction,
 )
 from .. import compat, scene_data
 from ..world import reader as world
 
-SUN_NAME = "SH Sun"
-SUN_MARKER = "sh_lighting_sun"  # custom property on the Sun object Split Sun made
 # Normals at which a window's error is measured against the world (brute force, eq. 1).
 COST_NORMALS = 256
 
@@ -287,107 +279,3 @@ def apply_window(scene, kind, width=DEFAULT_WIDTH):
         scene_data.edited(scene, f"{kind} window"), gains=gains,
     )
     return WindowResult(kind, window, stored, costs, note)
-
-
-# -- the sun -----------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True, eq=False)
-class SunInfo:
-    """The Sun light ``split_sun`` made or updated.
-
-    light: the object's name; created: True if new. direction: (3,) unit vector toward the
-    sun, world axes; angle: angular diameter (radians); strength: W/m²; colour: (3,) linear
-    RGB, max 1 (strength · colour is the irradiance it gives a surface facing it);
-    power_fraction: its share of the world's light; coefficients: (9, 3) the rest, stored.
-    """
-
-    light: str
-    created: bool
-    direction: np.ndarray
-    angle: float
-    strength: float
-    colour: np.ndarray
-    power_fraction: float
-    coefficients: np.ndarray
-
-
-def find_sun_object(scene):
-    """The Sun light object in ``scene`` that Split Sun made (marked ``SUN_MARKER``), or None."""
-    for obj in scene.objects:
-        if obj.get(SUN_MARKER) and obj.type == "LIGHT":
-            return obj
-    return None
-
-
-def _sun_object(scene):
-    """(object, created): ours if the scene has it, else a new one in the scene collection."""
-    obj = find_sun_object(scene)
-    if obj is not None:
-        obj.data.type = "SUN"
-        return obj, False
-    light = bpy.data.lights.new(SUN_NAME, type="SUN")
-    obj = bpy.data.objects.new(SUN_NAME, light)
-    obj[SUN_MARKER] = True
-    obj.id_properties_ui(SUN_MARKER).update(
-        description="Made by SH Lighting's Split Sun, which updates this light on every split"
-    )
-    scene.collection.objects.link(obj)
-    return obj, True
-
-
-def split_sun(scene):
-    """Take the world image's sun out as a Blender Sun light; the coefficients get the rest.
-
-    Detects the dominant small bright source (``core.sun.detect_sun``); returns None, changing
-    nothing, when there is none. Otherwise creates (or updates) the Sun object "SH Sun",
-    aimed so that it shines from the sun's direction in the world (Mapping rotation applied),
-    with its angular diameter, colour and a strength giving exactly the irradiance of the
-    texels taken out (× the Background's Strength), and takes the sun's own coefficients out
-    of the Reset values and of the current ones (so earlier edits are kept, and Reset does not
-    bring the sun back). When the Reset values were split already (their provenance names the
-    sun), only the light is updated. Returns a ``SunInfo``.
-    """
-    image = _world_image(scene, "Split Sun")
-    if not image.strength > 0.0:
-        return None  # a black (or negative) world has no sun to split off
-    pixels = image.pixels()
-    sun = detect_sun(pixels, luminance=luminance())
-    if sun is None:
-        return None
-    rest = map_coefficients(remove_sun(pixels, sun), image.strength, image.rotation)
-    sun_coeffs = map_coefficients(pixels, image.strength, image.rotation) - rest
-    direction = to_world_direction(sun.direction, image.rotation)
-    strength = sun.strength * image.strength
-    scene_data.validate(rest)  # fail before anything changes
-
-    obj, created = _sun_object(scene)
-    light = obj.data
-    light.energy = strength
-    light.color = tuple(float(v) for v in sun.colour)
-    light.angle = sun.angular_diameter
-    obj.rotation_mode = "XYZ"
-    obj.rotation_euler = Matrix(sun_light_rotation(direction).tolist()).to_euler("XYZ")
-    stored = _take_out_sun(scene, image, rest, sun_coeffs, obj.name)
-    return SunInfo(obj.name, created, direction, sun.angular_diameter, strength,
-                   np.array(sun.colour), sun.power_fraction, stored)
-
-
-def _take_out_sun(scene, image, rest, sun_coeffs, light):
-    """Store the Reset values and the current ones without the sun (see ``split_sun``)."""
-    computed = scene_data.get_computed(scene)
-    record = scene_data.computed_provenance(scene)
-    current = scene_data.get_coefficients(scene) if scene_data.has_coefficients(scene) else None
-    if computed is not None and record.get("sun"):
-        return current  # split already: the coefficients hold no sun
-    edited = current is not None and (computed is None or not np.array_equal(current, computed))
-    previous = scene_data.provenance(scene)
-    if computed is None:
-        record = {"source": "WORLD", "world": image.world, "method": "IMAGE",
-                  "image": image.image.name}
-        computed = rest + sun_coeffs
-    stored = scene_data.store(scene, computed - sun_coeffs, {**record, "sun": light})
-    if edited:
-        previous["edit"] = "split_sun"
-        stored = scene_data.store(scene, current - sun_coeffs, previous)
-    return stored

@@ -1,18 +1,25 @@
 """Extract Lights: the world image's compact bright sources as Blender Sun lights, SH for the
-rest (``core.lights``; generalises Split Sun).
+rest (``core.lights``; one light is what Split Sun was).
 
-``extract_lights(scene, count, error_target)`` reads the world's equirect Environment Texture
-(``world.read_world``: the Background's Strength and the Mapping node's rotation as evaluated
-at the current frame, the pixels decoded as Compute from World sees them), takes up to ``count`` sources out, makes one Sun light per source (aimed along the
+``extract_lights(scene, count, error_target, size_limit)`` reads the world's equirect
+Environment Texture (``world.read_world``: the Background's Strength and the Mapping node's
+rotation as evaluated at the current frame, the pixels decoded as Compute from World sees
+them), takes up to ``count`` sources out, makes one Sun light per source (aimed along the
 source's direction in the world, angle from its size, colour and strength from its texels ×
 Strength) and stores the coefficients of the world without them, as the current values and as
-the Reset values (as Split Sun does: Reset then keeps the lights out of the SH). The lights
-are ordinary objects (move, retint, delete them; all undoable), marked by the custom property
-``LIGHT_MARKER`` (their index) so that a new extraction updates them in place and deletes the
-ones no longer needed, and Compute from World (which stores the whole world's coefficients
-again) deletes them (``remove_lights``): a light is never counted twice. The brightest light
-is also Split Sun's Sun (``design.SUN_MARKER``, and the provenance names it), so Split Sun
-updates that light instead of adding another, and an extraction reuses Split Sun's Sun.
+the Reset values (Reset then keeps the lights out of the SH). The lights are ordinary objects
+(move, retint, delete them; all undoable) in a collection of their own, "SH Lights (<image>)",
+placed ``DISTANCE`` from the 3D cursor along their direction, where they are easy to find.
+
+Which lights are the add-on's: the scene's ``REGISTRY`` property holds pointers to the objects
+(and the collection) it made. A pointer follows its object through renames, save and reload,
+and a duplicate (Shift+D) is not pointed to, so an artist's copy is never changed or deleted;
+nor is a light linked from a library. A new extraction updates the registered lights in place
+and deletes the ones no longer needed, and Compute from World (which stores the whole world's
+coefficients again) deletes them (``remove_lights``): a light is never counted twice. Files
+saved before the registry marked the lights with ``LEGACY_MARKERS`` (Extract Lights' index,
+Split Sun's flag); such a light is taken as the add-on's only when its name is one the Reset
+values' provenance records, which a duplicate's name is not.
 
 The world itself keeps the sources (the background and, in Apply mode KEEP_BSDF, the glossy
 and transmission reflections of the world still show them), so the lights are made invisible
@@ -20,11 +27,13 @@ to glossy and transmission rays: in Cycles they then light diffuse closures only
 what was taken out of the SH, and a glossy surface does not reflect a source twice.
 """
 
+import time
 from dataclasses import dataclass
+from math import degrees
 
 import bpy
 import numpy as np
-from mathutils import Matrix
+from mathutils import Matrix, Vector
 
 from ...core import lights as core_lights
 from ...core.world_map import map_coefficients, sun_light_rotation, to_world_direction
@@ -32,93 +41,172 @@ from .. import scene_data
 from ..world import reader as world
 from . import edits as design
 
-LIGHT_MARKER = "sh_lighting_light"
+REGISTRY = "sh_lighting_lights"  # scene property: {"lights": [Object], "collection": Collection}
+LEGACY_MARKERS = ("sh_lighting_light", "sh_lighting_sun")  # object properties before it
 LIGHT_NAME = "SH Light"
+COLLECTION_NAME = "SH Lights ({})"
+DISTANCE = 5.0  # metres from the 3D cursor toward the source: where each new light is placed
+SIZE_LIMIT = 2.0 * float(core_lights.MAX_RADIUS)  # radians across: larger sources stay in SH
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 @dataclass(frozen=True, eq=False)
 class LightsInfo:
     """What ``extract_lights`` did: lights (names, brightest first), created / removed (names),
     extraction (the ``core.lights.Extraction``, in the image's axes, before Strength),
-    coefficients (9, 3) stored, strength and rotation of the world read."""
+    coefficients (9, 3) stored; image (name), collection (name or ""), seconds taken."""
 
     lights: list
     created: list
     removed: list
     extraction: object
     coefficients: np.ndarray
+    image: str
+    collection: str
+    seconds: float
 
     def report(self):
-        """One line for the user."""
-        errors = self.extraction.errors
-        before, after = 100 * errors[0][0], 100 * errors[-1][0]
-        if not self.lights:
-            text = "No compact bright source found in the world image"
+        """One line for the user: the image, what was made, the 9-term error before and
+        after, the time, why no more lights were taken and what would take more."""
+        extraction = self.extraction
+        before, after = 100 * extraction.errors[0][0], 100 * extraction.errors[-1][0]
+        text = f"Extract Lights from '{self.image}' ({self.seconds:.2f} s): "
+        if self.lights:
+            text += (f"{len(self.lights)} light(s) in '{self.collection}' "
+                     f"({', '.join(self.lights)})")
+            if self.removed:
+                text += f", {len(self.removed)} old one(s) removed"
+            text += (f"; mean error vs the world's irradiance {before:.2f} % of its light "
+                     f"with SH alone, {after:.2f} % with SH + lights")
         else:
-            text = f"{len(self.lights)} light(s) extracted: " + ", ".join(self.lights)
-        if self.removed:
-            text += f" ({len(self.removed)} old one(s) removed)"
-        return (f"{text}; mean error vs the world's irradiance {before:.2f} % of its light with "
-                f"SH alone, {after:.2f} % with SH + lights")
+            if self.removed:
+                text += f"{len(self.removed)} old light(s) removed, "
+            text += (f"no light extracted, the world stays in the SH (mean error "
+                     f"{before:.2f} % of its light)")
+        if extraction.stop_kind != core_lights.COUNT:
+            text += f"; no more: {extraction.stop}"
+        if extraction.stop_kind == core_lights.TOO_LARGE:
+            limit = degrees(2.0 * extraction.max_radius)
+            if limit < degrees(2.0 * core_lights.LARGEST_RADIUS):
+                text += (f" (raise Size Limit above {limit:.0f}° to extract it as a light, or "
+                         "leave it in the SH)")
+        return text
 
 
-def extracted_lights(scene):
-    """The light objects of ``scene`` an extraction (or Split Sun) made, by index."""
+def _registry(scene):
+    value = scene.get(REGISTRY)
+    return value if hasattr(value, "to_dict") else None
+
+
+def _ours(scene, obj):
+    """Whether ``obj`` is a light of ``scene`` the add-on may change: in the scene, local."""
+    return (obj is not None and obj.type == "LIGHT" and obj.library is None
+            and scene.objects.get(obj.name) == obj)
+
+
+def _legacy(scene):
+    """Lights a file saved before ``REGISTRY`` marked, whose names the provenance records."""
+    names = set()
+    for record in (scene_data.computed_provenance(scene), scene_data.provenance(scene)):
+        names.update(str(n) for n in record.get("lights", ()))
+        if record.get("sun"):
+            names.add(str(record["sun"]))
     found = []
     for obj in scene.objects:
-        if obj.type != "LIGHT":
-            continue
-        if LIGHT_MARKER in obj:
-            found.append((int(obj[LIGHT_MARKER]), obj.name, obj))
-        elif obj.get(design.SUN_MARKER):
-            found.append((-1, obj.name, obj))
+        marks = [obj.get(m) for m in LEGACY_MARKERS]
+        if obj.name in names and any(m is not None for m in marks) and _ours(scene, obj):
+            index = marks[0] if isinstance(marks[0], int) else -1
+            found.append((index, obj.name, obj))
     return [obj for _, _, obj in sorted(found, key=lambda item: item[:2])]
 
 
+def extracted_lights(scene):
+    """The light objects of ``scene`` an extraction made (brightest first), that it may change."""
+    registry = _registry(scene)
+    if registry is None:
+        return _legacy(scene)
+    made = [obj for obj in registry.get("lights", ()) if _ours(scene, obj)]
+    return list(dict.fromkeys(made))
+
+
+def _collection(scene):
+    """The collection of the extracted lights if it is still the add-on's and in the scene."""
+    registry = _registry(scene)
+    found = registry.get("collection") if registry is not None else None
+    if found is None or found.library is not None:
+        return None
+    return found if found in scene.collection.children_recursive else None
+
+
+def _delete(obj):
+    light = obj.data
+    bpy.data.objects.remove(obj)
+    if light is not None and light.users == 0:
+        bpy.data.lights.remove(light)
+
+
+def _record(scene, made, collection):
+    scene[REGISTRY] = {"lights": list(made), "collection": collection}
+    if not made and collection is None:
+        del scene[REGISTRY]
+
+
 def remove_lights(scene):
-    """Delete the extracted lights of ``scene`` (their light data too if unused); names."""
+    """Delete the extracted lights of ``scene`` (their light data too if unused) and their
+    collection if it is left empty; the names of the lights deleted."""
     names = []
     for obj in extracted_lights(scene):
         names.append(obj.name)
-        light = obj.data
-        bpy.data.objects.remove(obj)
-        if light is not None and light.users == 0:
-            bpy.data.lights.remove(light)
+        _delete(obj)
+    collection = _collection(scene)
+    if collection is not None and not collection.objects and not collection.children:
+        bpy.data.collections.remove(collection)
+    if _registry(scene) is not None:
+        del scene[REGISTRY]
     return names
 
 
-def _light_object(scene, existing, index):
-    """(object, created): the extracted light ``index`` if there is one, else a new one."""
-    if existing:
-        obj = existing.pop(0)
-        obj.data.type = "SUN"
-        if index == 0:
-            obj[design.SUN_MARKER] = True
-        elif design.SUN_MARKER in obj:
-            del obj[design.SUN_MARKER]
-        obj[LIGHT_MARKER] = index
-        obj.visible_glossy = obj.visible_transmission = False
-        return obj, False
+def _new_light(scene, collection, index, direction):
     name = f"{LIGHT_NAME} {index + 1}"
     obj = bpy.data.objects.new(name, bpy.data.lights.new(name, type="SUN"))
-    obj[LIGHT_MARKER] = index
-    if index == 0:
-        obj[design.SUN_MARKER] = True  # Split Sun updates this light, adds no other
-    obj.visible_glossy = obj.visible_transmission = False  # the world's image reflects it
-    obj.id_properties_ui(LIGHT_MARKER).update(
-        description="Made by SH Lighting's Extract Lights, which updates or deletes this light "
-        "(Reset and Compute from World delete it)")
-    scene.collection.objects.link(obj)
-    return obj, True
+    obj.location = scene.cursor.location + DISTANCE * Vector(direction)
+    collection.objects.link(obj)
+    return obj
 
 
-def extract_lights(scene, count=3, error_target=None):
+def _own_collection(scene, image):
+    """The add-on's collection for lights from ``image``, made (in the scene) if needed."""
+    name = COLLECTION_NAME.format(image)
+    collection = _collection(scene)
+    if collection is None:
+        collection = bpy.data.collections.new(name)
+        scene.collection.children.link(collection)
+    elif collection.name != name:
+        collection.name = name
+    return collection
+
+
+def _check_lights(extraction, strength):
+    """A DesignError, before anything changes, when a light's strength is beyond float32."""
+    for index, light in enumerate(extraction.lights, 1):
+        energy = light.strength * strength
+        if not energy <= FLOAT32_MAX:
+            raise design.DesignError(
+                f"light {index} would have strength {energy:.3g} W/m², beyond what Blender "
+                f"stores (float32, {FLOAT32_MAX:.3g}): lower the world's Strength or the "
+                "image's values")
+
+
+def extract_lights(scene, count=3, error_target=None, size_limit=SIZE_LIMIT):
     """Take up to ``count`` lights out of the world image (module docstring); ``LightsInfo``.
 
     ``error_target``: stop once the mean error of SH + lights is at most this fraction of the
-    world's light. A ValueError (``world.WorldError``, ``design.DesignError``) with nothing
-    changed when the world is not an equirect image or an argument is wrong.
+    world's light. ``size_limit``: radians across; larger sources stay in the SH (up to
+    ``2 core.lights.LARGEST_RADIUS``). A ValueError (``world.WorldError``,
+    ``design.DesignError``) with nothing changed when the world is not an equirect image, an
+    argument is wrong or a light would not fit Blender's float32 values.
     """
+    started = time.perf_counter()
     source = world.read_world(scene)
     if isinstance(source, world.ProceduralSource):
         raise design.DesignError(
@@ -135,34 +223,49 @@ def extract_lights(scene, count=3, error_target=None):
         raise design.DesignError(
             f"world '{source.world}' has Strength {strength:g}: no light to extract")
     extraction = core_lights.extract_lights(source.pixels(), count, error_target,
+                                             max_radius=0.5 * float(size_limit),
                                              luminance=design.luminance())
     rest = map_coefficients(extraction.rest, strength, source.rotation)
     scene_data.validate(rest)  # fail before anything changes
+    _check_lights(extraction, strength)
 
     existing = extracted_lights(scene)
-    names, created = [], []
+    collection = _own_collection(scene, source.image.name) if extraction.lights else None
+    made, created = [], []
     for index, light in enumerate(extraction.lights):
-        obj, new = _light_object(scene, existing, index)
+        direction = to_world_direction(light.direction, source.rotation)
+        if existing:
+            obj = existing.pop(0)
+            obj.data.type = "SUN"
+        else:
+            obj = _new_light(scene, collection, index, direction)
+            created.append(obj.name)
+        for marker in LEGACY_MARKERS:  # adopted from an old file: the registry says it now
+            if marker in obj:
+                del obj[marker]
+        obj.visible_glossy = obj.visible_transmission = False  # the world's image reflects it
         data = obj.data
         data.energy = light.strength * strength
         data.color = tuple(float(v) for v in light.colour)
         data.angle = light.angular_diameter
-        direction = to_world_direction(light.direction, source.rotation)
         obj.rotation_mode = "XYZ"
         obj.rotation_euler = Matrix(sun_light_rotation(direction).tolist()).to_euler("XYZ")
-        names.append(obj.name)
-        if new:
-            created.append(obj.name)
+        made.append(obj)
     removed = []
     for obj in existing:  # lights of an earlier extraction no longer needed
         removed.append(obj.name)
-        light = obj.data
-        bpy.data.objects.remove(obj)
-        if light is not None and light.users == 0:
-            bpy.data.lights.remove(light)
+        _delete(obj)
+    if collection is None:
+        collection = _collection(scene)
+        if collection is not None and not collection.objects and not collection.children:
+            bpy.data.collections.remove(collection)  # ours, and nothing left in it
+            collection = None
+    _record(scene, made, collection)
+    names = [obj.name for obj in made]
     record = {"source": "WORLD", "world": source.world, "method": "IMAGE",
               "image": source.image.name, "lights": names}
     if names:
         record["sun"] = names[0]
     stored = scene_data.store(scene, rest, record)  # also the Reset values
-    return LightsInfo(names, created, removed, extraction, stored)
+    return LightsInfo(names, created, removed, extraction, stored, source.image.name,
+                      collection.name if made else "", time.perf_counter() - started)

@@ -1,5 +1,5 @@
 """Lighting design in the UI: rotate the light, change its exposure and colour, tame ringing,
-split off the sun, see the basis.
+take lights out of the world (Extract Lights, ``ui.lights``), see the basis.
 
 Operators (all undoable, with polls that say why they are disabled) hand plain values to
 ``design`` and turn its errors into an ERROR report with nothing changed. Rotate, Exposure,
@@ -244,33 +244,6 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
         return window_report(design.apply_window(scene, self.kind, self.width))
 
 
-class SHLIGHT_OT_split_sun(_Edit, bpy.types.Operator):
-    """Take the sun out of the world image as a Sun light (direction, size, colour, strength)
-    and keep the rest of the world as SH lighting"""
-
-    bl_idname = "shlight.split_sun"
-    bl_label = "Split Sun"
-
-    @classmethod
-    def poll(cls, context):
-        if not scene_poll(cls, context):
-            return False
-        if context.scene.world is None:
-            cls.poll_message_set("The scene has no world: give it an HDR image first")
-            return False
-        return True
-
-    def apply(self, scene):  # WorldError and DesignError are ValueErrors: _Edit reports them
-        info = design.split_sun(scene)
-        if info is None:
-            return "No sun found in the world image: nothing changed"
-        verb = "created" if info.created else "updated"
-        return (
-            f"Sun light '{info.light}' {verb} ({info.strength:.3g} W/m², "
-            f"{info.power_fraction:.0%} of the world's light); SH lighting keeps the rest"
-        )
-
-
 def window_report(result):
     """One readable line about a ``design.WindowResult``: the band factors and, when known,
     the error against the world image with and without the window."""
@@ -323,9 +296,7 @@ def draw_design(layout, context):
     row = col.row(align=True)
     for kind in design.WINDOWS:
         row.operator("shlight.window", text=design.LABELS[kind]).kind = kind
-    row = layout.row(align=True)
-    row.operator("shlight.split_sun", icon="LIGHT_SUN")
-    lights_ui.draw_lights(row)
+    lights_ui.draw_lights(layout.row(align=True))
 
 
 SHLIGHT_PT_world_design, SHLIGHT_PT_view3d_design = panels.sub_panels(
@@ -344,7 +315,6 @@ classes = (
     SHLIGHT_OT_band_gains,
     SHLIGHT_OT_flip_vertical,
     SHLIGHT_OT_window,
-    SHLIGHT_OT_split_sun,
     SHLIGHT_PT_world_design,
     SHLIGHT_PT_view3d_design,
     SHLIGHT_PT_world_basis,

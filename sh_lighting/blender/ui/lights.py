@@ -2,15 +2,16 @@
 
 import bpy
 
-from ...core.lights import MAX_COUNT
+from ...core.lights import LARGEST_RADIUS, MAX_COUNT
 from ..design import lights
 from .polls import scene_poll
 
 
 class SHLIGHT_OT_extract_lights(bpy.types.Operator):
     """Take the world image's compact bright sources (sun, windows, softboxes) out as Sun
-    lights and keep the rest of the world as SH lighting (earlier extracted lights are
-    updated or deleted, never doubled)"""
+    lights and keep the rest of the world as SH lighting (one light: the sun; earlier
+    extracted lights are updated or deleted, never doubled, and lights you made or duplicated
+    are never touched)"""
 
     bl_idname = "shlight.extract_lights"
     bl_label = "Extract Lights"
@@ -25,6 +26,11 @@ class SHLIGHT_OT_extract_lights(bpy.types.Operator):
     error_target: bpy.props.FloatProperty(
         name="Target", default=0.5, min=0.01, max=10.0, subtype="PERCENTAGE",
         description="Mean error of SH + lights against the world's irradiance, % of its light")
+    size_limit: bpy.props.FloatProperty(
+        name="Size Limit", default=lights.SIZE_LIMIT, min=0.02, max=2.0 * LARGEST_RADIUS,
+        subtype="ANGLE",
+        description="Largest source taken out as a light, across; larger ones (a big window, "
+        "a sky) stay in the SH lighting")
 
     @classmethod
     def poll(cls, context):
@@ -38,10 +44,20 @@ class SHLIGHT_OT_extract_lights(bpy.types.Operator):
     def invoke(self, context, event):
         return context.window_manager.invoke_props_dialog(self)
 
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(self, "count")
+        layout.prop(self, "use_error_target")
+        row = layout.row()
+        row.active = self.use_error_target  # the target counts only with Error Target on
+        row.prop(self, "error_target")
+        layout.prop(self, "size_limit")
+
     def execute(self, context):
         target = self.error_target / 100.0 if self.use_error_target else None
         try:
-            info = lights.extract_lights(context.scene, self.count, target)
+            info = lights.extract_lights(context.scene, self.count, target, self.size_limit)
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
