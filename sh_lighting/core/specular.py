@@ -29,6 +29,9 @@ from .equirect import check_pixels, direction_to_uv, texel_directions, texel_sol
 # Columns of the downsampled source per output texel along a great circle: a cube face of size
 # s spans π/2, so 4s columns over 2π give the source texel the output texel's angular size.
 SOURCE_TEXELS_PER_TEXEL = 4
+# Fewest source texels the prefilter sums over (``split_texels``): 8 × 16 centres leave none of
+# the sphere's hemispheres empty.
+MIN_SOURCE_ROWS, MIN_SOURCE_COLUMNS = 8, 16
 _CHUNK = 1 << 22  # output directions × source texels per matrix product (32 MiB in float64)
 
 
@@ -102,14 +105,28 @@ def bilinear_lookup(pixels, directions):
     return top * (1.0 - fy) + bottom * fy
 
 
+def split_texels(pixels, rows=MIN_SOURCE_ROWS, columns=MIN_SOURCE_COLUMNS):
+    """``pixels`` with each texel split into k × m equal ones, so that it has at least
+    ``rows`` × ``columns`` texels (the same piecewise-constant map, the same light): the
+    prefilter's sum over texel centres then finds texels in every direction's hemisphere (a
+    map one texel wide has all its centres at φ = 0). Returns ``pixels`` itself when large
+    enough."""
+    h, w = pixels.shape[:2]
+    k, m = -(-rows // h), -(-columns // w)
+    if k == 1 and m == 1:
+        return pixels
+    return np.repeat(np.repeat(pixels, k, axis=0), m, axis=1)
+
+
 def prefilter(pixels, directions, alpha, source_width):
     """P_α (module docstring) at unit Blender ``directions`` (..., 3) → (..., 3) float64.
 
     The sum runs over the image downsampled to ``source_width`` × ``source_width``/2 texels
-    (the image itself if it is not larger).
+    (the image itself if it is not larger, its texels split if it has fewer than
+    ``MIN_SOURCE_ROWS`` × ``MIN_SOURCE_COLUMNS``: ``split_texels``).
     """
     check_pixels(pixels)
-    source = downsample(pixels, max(1, source_width // 2), source_width)
+    source = split_texels(downsample(pixels, max(1, source_width // 2), source_width))
     h, w = source.shape[:2]
     omega = texel_directions(h, w).reshape(-1, 3)
     radiance = source.reshape(-1, 3)

@@ -354,3 +354,47 @@ def test_an_hdri_beyond_float32_is_refused_not_rendered_black(tmp_path):
     line = one_error_line(run("compute", hdri, "--out", tmp_path / "huge.json"))
     assert "coefficient L00 channel R is 3.54491e+38, beyond the float32 range" in line
     assert not (tmp_path / "huge.json").exists()
+
+
+def _gltf_specular_levels(path):
+    """The decoded radiance of every specular image of a .gltf written by ``compute``."""
+    import base64
+    import json
+    import zlib
+
+    from sh_lighting.formats import gltf as env
+
+    document = json.loads(Path(path).read_text())
+    (light,) = document["extensions"]["EXT_lights_image_based"]["lights"]
+    levels = []
+    for faces in light["specularImages"]:
+        decoded = []
+        for index in faces:
+            png = base64.b64decode(document["images"][index]["uri"].split(",", 1)[1])
+            width, height = int.from_bytes(png[16:20], "big"), int.from_bytes(png[20:24], "big")
+            pos, idat = 8, b""
+            while pos < len(png):
+                length, kind = int.from_bytes(png[pos:pos + 4], "big"), png[pos + 4:pos + 8]
+                if kind == b"IDAT":
+                    idat += png[pos + 8:pos + 8 + length]
+                pos += 12 + length
+            rows = np.frombuffer(zlib.decompress(idat), np.uint8).reshape(height, -1)
+            assert (rows[:, 0] == 0).all()  # no PNG filter: the bytes are the texels
+            decoded.append(env.rgbd_decode(rows[:, 1:].reshape(height, width, 4)))
+        levels.append(np.stack(decoded))
+    return levels
+
+
+@pytest.mark.parametrize("height, width", [(1, 1), (8, 1)])
+def test_gltf_export_of_a_map_one_texel_wide_lights_the_whole_cube(tmp_path, height, width):
+    """Issue 20 item 10: specular levels 1-3 were black on about half the cube (0/0 -> NaN
+    -> 0) with a numpy RuntimeWarning, exit 0. A constant map prefilters to itself."""
+    hdri = write_exr(tmp_path / "thin.exr", constant_pixels(SKY, height=height, width=width))
+    out = tmp_path / "thin.gltf"
+    result = run("compute", hdri, "--format", "gltf", "--out", out)
+    assert result.returncode == 0, result.stderr
+    assert "Warning" not in result.stderr, result.stderr
+    for level, faces in enumerate(_gltf_specular_levels(out)):
+        # RGBD's 8-bit steps: within 3 % of the dim channel (0.2), 0.6 % of the others
+        assert_allclose(faces.reshape(-1, 3).min(axis=0), SKY, rtol=0.03, err_msg=f"{level}")
+        assert_allclose(faces.reshape(-1, 3).max(axis=0), SKY, rtol=0.03, err_msg=f"{level}")
