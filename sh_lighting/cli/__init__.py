@@ -50,6 +50,11 @@ inputs, and a path starting with ``//`` is relative to the .blend's folder, as i
   may be writing theirs), ``--expect-files`` refuses a folder that does not hold the N
   entries the job was split for.
 
+* ``bake-transfer [BLEND] (--out NEW.blend | --in-place) [--objects NAME ...] [--samples N]
+  [--apply [--mode KEEP_BSDF|EMISSION]] [--overwrite]``: bakes the transfer (shadows and
+  bounce light, ``blender.transfer``) of the scene's meshes (or the named ones) with Cycles,
+  a line per basis function with its time; ``--apply`` lights their materials by it; saves.
+
 Exit status: 0 on success, 1 when a command (or any file of a batch) failed, 2 for wrong
 arguments or when the package cannot be found. Errors go to stderr as ``sh_lighting: error:``.
 
@@ -64,7 +69,7 @@ picks and saves the .blend, ``options`` holds the shared argument types, ``scrip
 import argparse
 import sys
 
-from . import apply, batch, compute, render
+from . import apply, batch, compute, render, transfer
 from .report import CommandError, error_line
 
 PROG = "python -m sh_lighting"
@@ -74,6 +79,7 @@ COMMANDS = {
     "apply": apply,
     "render": render,
     "batch": batch,
+    "bake-transfer": transfer,
 }
 
 __all__ = ["COMMANDS", "CommandError", "PROG", "build_parser", "main", "run_blender_command"]

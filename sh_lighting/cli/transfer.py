@@ -1,0 +1,79 @@
+"""``bake-transfer [BLEND]``: the transfer T_lm (shadows and bounce light) of a .blend's meshes
+baked by Cycles (``blender.transfer``), optionally applied to their materials, saved to a new
+file or in place."""
+
+from .apply import objects_to_apply
+from .options import add_mode, add_scene, positive
+from .paths import blend_relative, check_new_file, refuse_inputs
+from .report import CommandError, say
+from .session import open_blend, open_file, pick_scene, save_blend
+
+HELP = "bake the SH transfer (shadows, bounce light) of a .blend's meshes with Cycles"
+DEFAULT_SAMPLES = 64  # blender.transfer.bake.DEFAULT_SAMPLES (no bpy import for --help)
+
+
+def add_arguments(p, prog):
+    p.description = (
+        "Bake, for the meshes of the scene (or --objects), the nine transfer values per face "
+        "corner (precomputed radiance transfer: the SH lighting with the scene's shadows and "
+        "interreflection) with Cycles, then save to --out (a new file) or over the input "
+        "with --in-place. --apply also puts the SH Transfer group into their materials.")
+    p.epilog = (f"example:\n  {prog} bake-transfer shot.blend --objects Ground Box "
+                "--samples 64 --apply --out shot_transfer.blend")
+    p.add_argument("blend", metavar="BLEND", nargs="?",
+                   help=".blend file to bake (under blender -P: default the open one)")
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--out", metavar="NEW.blend", help="save the result to this new file")
+    where.add_argument("--in-place", action="store_true", help="replace the input .blend")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+    p.add_argument("--objects", nargs="+", metavar="NAME",
+                   help="the meshes to bake (default: every mesh the scene renders)")
+    p.add_argument("--samples", type=positive, default=DEFAULT_SAMPLES,
+                   help=f"Cycles samples per corner and basis function (default "
+                   f"{DEFAULT_SAMPLES}; the noise falls as 1/sqrt(samples))")
+    p.add_argument("--apply", action="store_true",
+                   help="also light the baked objects' materials by the transfer")
+    add_scene(p, "scene to bake")
+    add_mode(p)
+
+
+def run(args):
+    from .. import api
+
+    blend = open_file() if args.blend is None else None
+    blend = open_blend(args.blend, load_ui=True) if args.blend is not None else blend
+    if blend is None:
+        raise CommandError("no .blend given and none is open: pass the .blend file")
+    out = blend if args.in_place else blend_relative(args.out, blend, "--out")
+    if not args.in_place:
+        refuse_inputs(out, "--out", {".blend file": blend}, advice="use --in-place to replace it")
+        check_new_file(out, args.overwrite, what="--out")
+    scene = pick_scene(args.scene)
+    if args.objects:
+        objects = objects_to_apply(scene, args.objects)
+    else:
+        objects = [o for o in scene.objects if o.type == "MESH" and not o.hide_render]
+    try:
+        info = api.bake_transfer(scene, objects, samples=args.samples, report=say)
+    except api.TransferError as error:
+        raise CommandError(f"{error}; nothing saved") from None
+    per_10k = info.seconds / max(info.vertices, 1) * 1e4
+    say(f"Baked the transfer of {len(info.objects)} object(s) ({', '.join(info.objects)}): "
+        f"{info.vertices} vertices, {info.samples} samples, {info.seconds:.1f} s "
+        f"({per_10k:.1f} s per 10k vertices)")
+    for note in info.notes:
+        say(f"note: {note}")
+    if args.apply:
+        try:
+            changed, skipped = api.apply_transfer(objects, scene, args.mode)
+        except ValueError as error:
+            raise CommandError(f"{error}; nothing saved") from None
+        for name, reason in skipped:
+            say(f"skipped '{name}': {reason}")
+        say(f"Transfer applied to {len(changed)} material(s): {', '.join(changed)}")
+    try:
+        save_blend(out, overwrite=args.in_place or args.overwrite)
+    except (OSError, RuntimeError) as error:
+        raise CommandError(f"could not save '{out}': {error}") from None
+    say(f"Saved {out}")
+    return 0

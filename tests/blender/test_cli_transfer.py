@@ -1,0 +1,52 @@
+"""``bake-transfer`` on the command line, in its own process: bakes, applies, saves; a
+refusal is one line and leaves no file."""
+
+import bpy
+import pytest
+from cli_runs import run
+
+import transfer_scenes as ts
+from sh_lighting.blender.transfer import bake, nodes
+
+pytestmark = pytest.mark.blender
+
+
+def _blend(path, modifier=False):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    ground, box = ts.ground_and_box(2, 0)
+    ts.store_lighting(bpy.context.scene)
+    if modifier:
+        box.modifiers.new("Bevel", "BEVEL")
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
+def test_bake_transfer_bakes_applies_and_saves(tmp_path):
+    blend = _blend(tmp_path / "scene.blend")
+    out = tmp_path / "baked.blend"
+    result = run("bake-transfer", blend, "--samples", "4", "--apply", "--mode", "EMISSION",
+                 "--out", out, timeout=300)
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert sum(line.startswith("Transfer L") for line in lines) == 9
+    assert any(line.startswith("Baked the transfer of 2 object(s) (Ground, Box):")
+               for line in lines)
+    assert "Transfer applied to 1 material(s): Grey" in lines
+    assert lines[-1] == f"Saved {out}"
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    ground = bpy.data.objects["Ground"]
+    assert bake.status(bpy.context.scene, ground)[0] == "OK"
+    groups = [n.node_tree.name for n in bpy.data.materials["Grey"].node_tree.nodes
+              if n.bl_idname == "ShaderNodeGroup"]
+    assert groups == [nodes.GROUP_NAME]
+
+
+def test_bake_transfer_refusal_is_one_line_and_saves_nothing(tmp_path):
+    blend = _blend(tmp_path / "scene.blend", modifier=True)
+    out = tmp_path / "baked.blend"
+    result = run("bake-transfer", blend, "--samples", "4", "--out", out, timeout=300)
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == [
+        "sh_lighting: error: 'Box' has modifiers (Bevel): the transfer is stored on the mesh "
+        "itself, so apply them (or disable them for renders) and bake again; nothing saved"]
+    assert not out.exists()
