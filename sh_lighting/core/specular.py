@@ -32,7 +32,7 @@ SOURCE_TEXELS_PER_TEXEL = 4
 # Fewest source texels the prefilter sums over (``split_texels``): 8 × 16 centres leave none of
 # the sphere's hemispheres empty.
 MIN_SOURCE_ROWS, MIN_SOURCE_COLUMNS = 8, 16
-_CHUNK = 1 << 22  # output directions × source texels per matrix product (32 MiB in float64)
+_BLOCK = 1 << 16  # output directions × source texels per block of weights (256 KB of float32)
 
 
 def ggx_distribution(alpha, cos_h_squared):
@@ -123,23 +123,35 @@ def prefilter(pixels, directions, alpha, source_width):
 
     The sum runs over the image downsampled to ``source_width`` × ``source_width``/2 texels
     (the image itself if it is not larger, its texels split if it has fewer than
-    ``MIN_SOURCE_ROWS`` × ``MIN_SOURCE_COLUMNS``: ``split_texels``).
+    ``MIN_SOURCE_ROWS`` × ``MIN_SOURCE_COLUMNS``: ``split_texels``). With c = R·ω, D_α is
+    a2 / (π (A + B c)²), A = (α² + 1)/2, B = (α² − 1)/2; the constant a2/π cancels in the ratio, so each weight is
+    max(c, 0) / (A + B c)², formed in place in float32 blocks small enough for the cache, and
+    one product with [L Ω, Ω] per block gives numerator and denominator together.
     """
     check_pixels(pixels)
     source = split_texels(downsample(pixels, max(1, source_width // 2), source_width))
     h, w = source.shape[:2]
-    omega = texel_directions(h, w).reshape(-1, 3)
-    radiance = source.reshape(-1, 3)
+    omega = texel_directions(h, w).reshape(-1, 3).T.astype(np.float32)  # (3, N)
     solid = np.repeat(texel_solid_angles(h, w), w)
+    weighted = np.concatenate([source.reshape(-1, 3) * solid[:, None], solid[:, None]],
+                              axis=1).astype(np.float32)  # (N, 4): L Ω and Ω
     d = np.asarray(directions, dtype=np.float64)
     flat = d.reshape(-1, 3).astype(np.float32)
-    omega, solid = omega.astype(np.float32), solid.astype(np.float32)
+    a2 = float(alpha) ** 2
+    big_a, big_b = np.float32(0.5 * (a2 + 1.0)), np.float32(0.5 * (a2 - 1.0))
     out = np.empty((flat.shape[0], 3))
-    step = max(1, _CHUNK // omega.shape[0])
+    step = max(1, _BLOCK // omega.shape[1])
+    cos_rl = np.empty((step, omega.shape[1]), dtype=np.float32)
+    denominator = np.empty_like(cos_rl)
     for start in range(0, flat.shape[0], step):  # float32 weights: 1e-7 of a sum of them
-        cos_rl = flat[start:start + step] @ omega.T
-        weight = ggx_distribution(alpha, np.float32(0.5) * (np.float32(1.0) + cos_rl))
-        weight *= np.maximum(cos_rl, np.float32(0.0)) * solid
-        out[start:start + step] = (weight @ radiance) / weight.sum(axis=1, keepdims=True,
-                                                                    dtype=np.float64)
+        rows = flat[start : start + step]
+        c, t = cos_rl[: len(rows)], denominator[: len(rows)]
+        np.matmul(rows, omega, out=c)
+        np.multiply(c, big_b, out=t)
+        t += big_a
+        t *= t
+        np.maximum(c, np.float32(0.0), out=c)
+        c /= t
+        sums = (c @ weighted).astype(np.float64)
+        out[start : start + step] = sums[:, :3] / sums[:, 3:]
     return out.reshape(d.shape)

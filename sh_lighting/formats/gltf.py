@@ -35,6 +35,7 @@ from math import log2
 
 import numpy as np
 
+from ..core.downsample import block_downsample, whole_factor
 from ..core.equirect import check_pixels, texel_directions
 from ..core.irradiance import check_coefficients
 from ..core.sh import sh_basis
@@ -53,6 +54,9 @@ EXTENSION = "EXT_lights_image_based"
 CUBE_SIZE = 64  # S: the size of level 0
 LEVELS = 4  # 64, 32, 16, 8: the last (r = 1) at 8 × 8
 MINIMUM_VARIANCE = 0.0005  # Babylon's α = r² + 0.0005
+# The cube is built from the image box-downsampled to about this width (4 source texels
+# across each 64² level-0 texel; benchmarks/REPORT.md gives the change against full resolution).
+CUBE_SOURCE_WIDTH = 1024
 MIRROR_SUBSAMPLES = 4  # k × k bilinear lookups per level-0 texel for images coarser than it
 FACE_NAMES = ("px", "nx", "py", "ny", "pz", "nz")
 RGBD_GAMMA = 2.2
@@ -117,15 +121,17 @@ def cube_texel_index(directions, size):
     return (face * size + row) * size + col
 
 
-def specular_cube(pixels, size=CUBE_SIZE, levels=LEVELS, strength=1.0, euler=None):
+def specular_cube(pixels, size=CUBE_SIZE, levels=LEVELS, strength=1.0, euler=None,
+                  source_width=CUBE_SOURCE_WIDTH):
     """The prefiltered mip chain: a list of ``levels`` arrays (6, s, s, 3) of linear radiance,
     faces in glTF order, rows as in the PNG (top first).
 
     ``pixels``: the equirect image shown by the world at ``strength`` through a Mapping node
-    of XYZ Euler ``euler`` (``world_map``; None: no Mapping node).
+    of XYZ Euler ``euler`` (``world_map``; None: no Mapping node). Images wider than
+    ``source_width`` are first box-downsampled to about that width by a whole factor
+    (``core.downsample``: solid-angle weighted, power kept); None keeps the full resolution.
     """
-    check_pixels(pixels)
-    pixels = np.asarray(pixels, dtype=np.float64)[..., :3] * float(strength)
+    pixels = _cube_source(check_pixels(pixels), source_width) * float(strength)
     to_world = mapping_rotation(euler)  # world direction = to_world @ image direction
     if size < 2 or size & (size - 1) or not 1 <= levels <= int(log2(size)) + 1:
         raise ValueError(
@@ -145,6 +151,15 @@ def specular_cube(pixels, size=CUBE_SIZE, levels=LEVELS, strength=1.0, euler=Non
             faces = prefilter(source, directions @ to_world, alpha, SOURCE_TEXELS_PER_TEXEL * s)
         chain.append(np.asarray(faces, dtype=np.float64))
     return chain
+
+
+def _cube_source(pixels, source_width):
+    """The image's RGB as float64, box-downsampled to about ``source_width`` wide if wider."""
+    height, width = pixels.shape[:2]
+    factor = whole_factor(height, width, source_width) if source_width else 1
+    if factor == 1:
+        return np.asarray(pixels, dtype=np.float64)[..., :3]
+    return block_downsample(pixels, factor)[0]
 
 
 def _mirror_level(pixels, s, to_world):
