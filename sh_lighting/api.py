@@ -135,9 +135,7 @@ def compute_from_world(scene, capture_width=None):
     values, and the scene records where it came from (``get_provenance``). Returns the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
     user-facing message, leaving the scene unchanged, when the world cannot be read.
     """
-    coeffs = _compute.compute_and_store(scene, capture_width)[0]
-    _lights.remove_lights(scene)  # the whole world is in the SH again: no extracted light
-    return coeffs
+    return _compute.compute_and_store(scene, capture_width)[0]  # also deletes extracted lights
 
 
 def get_coefficients(scene):

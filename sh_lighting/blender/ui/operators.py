@@ -11,7 +11,6 @@ import time
 import bpy
 
 from .. import scene_data
-from ..design import lights
 from ..shading import materials
 from ..world import compute
 from .polls import coefficients_poll, scene_poll
@@ -76,7 +75,6 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
         except ValueError as error:  # WorldError and invalid coefficients
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        lights.remove_lights(context.scene)  # the whole world is in the SH again
         self.report({"INFO"}, compute.report(info, time.perf_counter() - start))
         return {"FINISHED"}
 

@@ -13,6 +13,7 @@ import os
 import bpy
 
 from .. import preferences, properties, scene_data
+from ..design import lights
 from . import reader as world
 
 
@@ -45,7 +46,8 @@ REPORT_ERROR_NORMALS = 64
 
 def compute_and_store(scene, capture_width=None, error_normals=0):
     """Compute from World: ``world.world_coefficients`` stored on ``scene`` (``scene_data.store``,
-    source "WORLD": they are also the Reset values).
+    source "WORLD": they are also the Reset values), and the lights Extract Lights made deleted
+    (``design.lights.remove_lights``: the whole world is in the SH again).
 
     ``capture_width`` None: the scene's override, else the add-on preferences', else 256 (an
     odd width rounded up). ``error_normals`` > 0: the ``WorldInfo`` also holds the 9-term error
@@ -59,7 +61,9 @@ def compute_and_store(scene, capture_width=None, error_normals=0):
         )
     coeffs, info = world.world_coefficients(scene, capture_width=_whole(capture_width),
                                             error_normals=error_normals)
-    return scene_data.store(scene, coeffs, world_provenance(info)), info
+    stored = scene_data.store(scene, coeffs, world_provenance(info))
+    lights.remove_lights(scene)  # the whole world is in the SH again: no extracted light
+    return stored, info
 
 
 def report(info, elapsed):
