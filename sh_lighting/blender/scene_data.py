@@ -48,7 +48,7 @@ and their animation alone: L = s(t) · c' at every frame.
 import bpy
 import numpy as np
 
-from ..core.coefficients import check_coefficients
+from ..core.coefficients import FLOAT32_MAX, check_coefficients, real_number, type_name
 from . import compat
 from ..core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
 
@@ -82,26 +82,134 @@ def has_coefficients(scene):
     return all(name in scene for name in PROPERTY_NAMES)
 
 
+class PropertyError(ValueError):
+    """A coefficient or gain custom property holds something the lighting cannot be made of
+    (text, a dict, two numbers, NaN, beyond float32...): the message names the property, its
+    value and how to put it right."""
+
+
+def _plain(value):
+    """An ID property's value as plain Python (lists and dicts for arrays and groups)."""
+    if hasattr(value, "to_dict"):
+        return value.to_dict()
+    if hasattr(value, "to_list"):
+        return value.to_list()
+    return value
+
+
+def _shown(value):
+    text = repr(value)
+    return f"{type_name(value)} ({text if len(text) <= 40 else text[:37] + '...'})"
+
+
+def _bad(scene, name, why):
+    """The PropertyError of property ``name``: ``why`` (a sentence naming "VALUE"), where,
+    and what to do (fix the animation, else Repair)."""
+    how = animation_of(scene, name)
+    where = f"scene['{name}']"
+    if how is not None:
+        where += f" ({how}) at frame {scene.frame_current}"
+        fix = "fix its keyframes or driver (Graph Editor, Drivers Editor), or delete them"
+    else:
+        fix = ("Repair in the SH Lighting panel (or Reset, Compute from World, a preset) "
+               "writes a valid value")
+    return PropertyError(f"{why.replace('VALUE', where, 1)}; {fix}")
+
+
+# The readers refuse ±FLOAT32_MAX itself: it is what Blender makes of a key or driver beyond
+# float32 (a driver computing 1e39 gives 3.40282e+38), which renders black.
+
+
+def read_gain(scene, index):
+    """s_lm of coefficient ``index`` as a float (1.0 when the property is missing), or a
+    PropertyError naming a value that is not a finite number within float32."""
+    name = GAIN_NAMES[index]
+    if name not in scene:
+        return 1.0
+    try:
+        return real_number(_plain(scene[name]), "VALUE", limit=FLOAT32_MAX)
+    except ValueError as error:
+        raise _bad(scene, name, str(error)) from None
+
+
+def read_channel(scene, index):
+    """c_lm of coefficient ``index``, 3 floats, or a PropertyError naming what is wrong."""
+    name = PROPERTY_NAMES[index]
+    value = _plain(scene[name])
+    if isinstance(value, str) or not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise _bad(scene, name, f"VALUE is {_shown(value)}, not 3 numbers (R, G, B)")
+    try:
+        return [real_number(v, f"VALUE channel {c}", limit=FLOAT32_MAX)
+                for v, c in zip(value, "RGB")]
+    except ValueError as error:
+        raise _bad(scene, name, str(error)) from None
+
+
 def gain(scene, index):
-    """s_lm of coefficient ``index`` (1.0 when the property is missing)."""
-    return float(scene.get(GAIN_NAMES[index], 1.0))
+    """s_lm of coefficient ``index`` (``read_gain``)."""
+    return read_gain(scene, index)
 
 
 def get_coefficients(scene):
-    """The scene's (9, 3) float64 lighting L_lm = s_lm · c_lm; a LookupError if never set."""
+    """The scene's (9, 3) float64 lighting L_lm = s_lm · c_lm, read and checked: the one
+    reader of the properties (panel, API, export, render). A LookupError if never set, a
+    PropertyError (a ValueError) naming the first property that is not valid."""
     missing = [name for name in PROPERTY_NAMES if name not in scene]
     if missing:
         raise LookupError(
             f"scene '{scene.name}' has no SH lighting coefficients yet ({', '.join(missing)} "
             "missing): run Compute from World or set them first"
         )
-    s = np.array([gain(scene, index) for index in range(9)])
+    s = np.array([read_gain(scene, index) for index in range(9)])
     return get_channels(scene) * s[:, None]
 
 
 def get_channels(scene):
-    """The scene's (9, 3) float64 channels c_lm, without the gains (a KeyError if unset)."""
-    return np.array([list(scene[name]) for name in PROPERTY_NAMES], dtype=np.float64)
+    """The scene's (9, 3) float64 channels c_lm, without the gains (``read_channel``)."""
+    return np.array([read_channel(scene, index) for index in range(9)], dtype=np.float64)
+
+
+def problems(scene):
+    """[(property name, message)] of every coefficient and gain property of ``scene`` that
+    ``get_coefficients`` would refuse (empty when all are valid or none exist)."""
+    found = []
+    for index, (name, gain_name) in enumerate(zip(PROPERTY_NAMES, GAIN_NAMES)):
+        for prop, read in ((name, read_channel), (gain_name, read_gain)):
+            if prop not in scene:
+                continue
+            try:
+                read(scene, index)
+            except PropertyError as error:
+                found.append((prop, str(error)))
+    return found
+
+
+def repair(scene):
+    """Write a valid value over every invalid, unanimated coefficient or gain property: a
+    gain 1, a channel its Reset value (the last computed from the world) or 0. Returns the
+    names repaired; a PropertyError, nothing changed, when an invalid one is animated (its
+    keyframes or driver would write it again)."""
+    bad = [name for name, _message in problems(scene)]
+    animated_bad = {name: how for name, how in animated(scene, bad).items()}
+    if animated_bad:
+        name = sorted(animated_bad)[0]
+        index = (PROPERTY_NAMES + GAIN_NAMES).index(name) % 9
+        (read_channel if name in PROPERTY_NAMES else read_gain)(scene, index)  # its message
+    try:
+        computed = get_computed(scene)
+    except PropertyError:
+        computed = None
+    for name in bad:
+        if name in GAIN_NAMES:
+            scene[name] = 1.0
+        else:
+            row = PROPERTY_NAMES.index(name)
+            scene[name] = [float(v) for v in computed[row]] if computed is not None else [0.0] * 3
+    if bad:
+        ensure_ui(scene)
+        scene.update_tag()
+        redraw()
+    return bad
 
 
 def validate(coeffs):
@@ -295,7 +403,17 @@ def get_computed(scene):
     """The (9, 3) values last computed from the world, or None."""
     if COMPUTED_PROPERTY not in scene:
         return None
-    return np.array(list(scene[COMPUTED_PROPERTY]), dtype=np.float64).reshape(9, 3)
+    value = _plain(scene[COMPUTED_PROPERTY])
+    try:
+        if isinstance(value, str) or not isinstance(value, (list, tuple)) or len(value) != 27:
+            raise ValueError(f"VALUE is {_shown(value)}, not 27 numbers")
+        numbers = [real_number(v, "VALUE") for v in value]
+    except ValueError as error:
+        raise PropertyError(
+            f"{str(error).replace('VALUE', f'scene[{COMPUTED_PROPERTY!r}]', 1)}: the Reset "
+            "values are lost; Compute from World writes them again"
+        ) from None
+    return np.array(numbers, dtype=np.float64).reshape(9, 3)
 
 
 def coefficient_description(index):

@@ -101,6 +101,23 @@ def frame_target(scene, output, frame):
     return Path(bpy.path.abspath(scene.render.frame_path(frame=frame)))
 
 
+def check_lighting(scene, frame):
+    """A CommandError naming the coefficient or gain that is not a valid number at ``frame``
+    as the render evaluates it (keyed to NaN, driven beyond float32, text...), which would
+    render black (issue 20 item 13); nothing when the scene has no coefficients."""
+    import bpy
+
+    from ..blender import scene_data
+
+    if not scene_data.has_coefficients(scene):
+        return
+    evaluated = scene.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    try:
+        scene_data.validate(scene_data.get_coefficients(evaluated))
+    except ValueError as error:
+        raise CommandError(f"frame {frame} not rendered: {error}") from None
+
+
 def render_frame(scene, output, frame, target, blend):
     """Render ``frame`` into ``target`` atomically; a CommandError if it cannot be written."""
     import bpy
@@ -115,6 +132,7 @@ def render_frame(scene, output, frame, target, blend):
         ) from None
     remove_own_leftovers(target)
     scene.frame_set(frame)
+    check_lighting(scene, frame)
     try:
         with atomic_destination(target, overwrite=True, suffix=target.suffix,
                                 what="render output") as temporary:

@@ -1,6 +1,7 @@
 """What a careless script hands the API: one clear error each, and the scene unchanged."""
 
 import os
+import re
 from pathlib import Path
 
 import bpy
@@ -167,3 +168,149 @@ def test_the_next_capture_removes_a_killed_captures_folder(addon):
     # Other processes (other test runs) may be capturing meanwhile: only ours are checked.
     ours = list(Path(tempfile.gettempdir()).glob(f"sh_lighting_capture_{os.getpid()}_*"))
     assert not stale.exists() and ours == []
+
+
+def test_a_driven_strength_is_read_as_the_next_render_shows_it(addon, tmp_path):
+    """Issue 20 item 15: Strength driven by scene["k"]; a render, then scene["k"] set from
+    Python and view_layer.update(): Compute read the old Strength (1 instead of 3)."""
+    scene = bpy.context.scene
+    world = bpy.data.worlds.new("Driven")
+    if world.node_tree is None:
+        world.use_nodes = True
+    tree = world.node_tree
+    texture = tree.nodes.new("ShaderNodeTexEnvironment")
+    texture.image = bpy.data.images.load(write_constant_exr(tmp_path / "c.exr", (0.5,) * 3))
+    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
+    scene.world = world
+    scene["k"] = 1.0
+    driver = background.inputs["Strength"].driver_add("default_value").driver
+    driver.type = "SCRIPTED"
+    variable = driver.variables.new()
+    variable.targets[0].id_type = "SCENE"
+    variable.targets[0].id = scene
+    variable.targets[0].data_path = '["k"]'
+    driver.expression = variable.name
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 1
+    scene.render.resolution_x = scene.render.resolution_y = 8
+    bpy.context.view_layer.update()
+    bpy.ops.render.render()
+    scene["k"] = 3.0
+    bpy.context.view_layer.update()
+    coeffs = api.compute_from_world(scene)
+    exact = 2.0 * np.sqrt(np.pi) * 0.5 * 3.0  # L00 of a constant sky c at Strength 3
+    np.testing.assert_allclose(coeffs[0], exact, rtol=1e-6)
+    assert api.get_provenance(scene)["strength"] == 3.0
+
+
+BAD_PROPERTIES = [
+    ("sh_L10", "abc", r"scene\['sh_L10'\] is a string \('abc'\), not 3 numbers \(R, G, B\)"),
+    ("sh_L10", 0.5, r"scene\['sh_L10'\] is float \(0.5\), not 3 numbers"),
+    ("sh_L10", [1, 2], r"scene\['sh_L10'\] is a list \(\[1, 2\]\), not 3 numbers"),
+    ("sh_L10", {"r": 1}, r"scene\['sh_L10'\] is a dict \(\{'r': 1\}\), not 3 numbers"),
+    ("sh_L10_gain", "abc", r"scene\['sh_L10_gain'\] is a string \('abc'\), not a number"),
+    ("sh_L10_gain", [1, 2], r"scene\['sh_L10_gain'\] is a list \(\[1, 2\]\), not a number"),
+]
+
+
+@pytest.mark.parametrize("name, value, message", BAD_PROPERTIES)
+def test_a_bad_custom_property_is_named_by_panel_api_and_export_and_repaired(
+        addon, tmp_path, name, value, message):
+    """Issue 20 item 17: the panel's draw raised on every redraw, API and export gave raw
+    numpy errors."""
+    from sh_lighting.blender import scene_data
+    from sh_lighting.blender.ui import design as design_ui
+    from sh_lighting.blender.ui import panels
+    from ui_layout import RecordingLayout
+
+    scene = bpy.context.scene
+    api.set_coefficients(scene, KNOWN, {"source": "WORLD"})  # also the Reset values
+    api.set_coefficients(scene, 2 * KNOWN)
+    scene[name] = value
+    hint = "Repair in the SH Lighting panel"
+    for draw in (panels.draw_main, panels.draw_coefficients, design_ui.draw_design):
+        layout = RecordingLayout()
+        draw(layout, bpy.context)
+        if draw is not design_ui.draw_design:
+            assert re.search(message, layout.text()) and hint in layout.text()
+            assert "shlight.repair" in layout.operators()
+    with pytest.raises(scene_data.PropertyError, match=message + ".*" + hint):
+        api.get_coefficients(scene)
+    with pytest.raises(ValueError, match=message):
+        api.export_preset(scene, tmp_path / "p.json")
+    assert not (tmp_path / "p.json").exists()
+    assert bpy.ops.shlight.repair() == {"FINISHED"}
+    expected = 2 * KNOWN
+    expected[2] = KNOWN[2] if name == "sh_L10" else 2 * KNOWN[2]  # the Reset row, or gain 1
+    assert_array_equal(api.get_coefficients(scene), expected)
+    assert scene_data.problems(scene) == []
+
+
+def _bad_gain_blend(tmp_path, how):
+    from cli_runs import make_inputs
+
+    inputs = make_inputs(tmp_path / "inputs")
+    bpy.ops.wm.open_mainfile(filepath=str(inputs["blend"]))
+    scene = bpy.context.scene
+    api.set_coefficients(scene, KNOWN)
+    if how == "keyed NaN":
+        scene["sh_L00_gain"] = float("nan")
+        scene.keyframe_insert('["sh_L00_gain"]', frame=2)
+    elif how == "driven 1e39":
+        scene.driver_add('["sh_L00_gain"]').driver.expression = "1e39"
+    else:
+        scene["sh_L00_gain"] = "abc"
+    blend = tmp_path / "bad.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    return blend
+
+
+@pytest.mark.parametrize("how, message", [
+    ("keyed NaN", r"scene\['sh_L00_gain'\] \(keyframed\) at frame 1 is nan"),
+    # Blender clamps the driver's 1e39 to the largest float32
+    ("driven 1e39", r"scene\['sh_L00_gain'\] \(driven\) at frame 1 is 3.40282e\+38, beyond "
+                    r"the float32 range"),
+    ("text", r"scene\['sh_L00_gain'\] is a string \('abc'\), not a number"),
+])
+def test_render_names_a_bad_gain_instead_of_rendering_black(tmp_path, how, message):
+    """Issue 20 item 13: these rendered black with exit status 0."""
+    from cli_runs import run
+
+    blend = _bad_gain_blend(tmp_path, how)
+    renders = tmp_path / "renders"
+    result = run("render", blend, "--output", renders / "f_####", "--frame", "1",
+                 "--engine", "CYCLES", "--samples", "1")
+    assert result.returncode == 1
+    line = result.stderr.strip().splitlines()[-1]
+    assert re.search(r"frame 1 not rendered: " + message, line), line
+    assert not renders.exists() or list(renders.iterdir()) == []
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda s: api.rotate(s, yaw="x"), r"^yaw is a string \('x'\), not a number: give an angle"),
+    (lambda s: api.rotate(s, pitch=float("inf")), r"^pitch is inf, not a finite number"),
+    (lambda s: api.rotate(s, roll=float("nan")), r"^roll is nan, not a finite number"),
+    (lambda s: api.exposure(s, None), r"^stops is None \(null\), not a number: give "),
+    (lambda s: api.exposure(s, float("-inf")), r"^stops is -inf, not a finite number"),
+    (lambda s: api.exposure(s, 1e6), r"^stops is 1e\+06: 2\^1e\+06 takes the lighting beyond"),
+    (lambda s: api.apply_window(s, "HANNING", "x"), r"^width is a string \('x'\), not a numb"),
+    (lambda s: api.apply_window(s, "LANCZOS", float("nan")), r"^width is nan, not a finite"),
+    (lambda s: api.apply_window(s, "x"), r"^unknown window 'x': use one of HANNING"),
+    (lambda s: api.saturation(s, [1]), r"^amount is a list \(\[1\]\), not a number"),
+    (lambda s: api.band_gains(s, quadratic=float("inf")), r"^quadratic is inf, not a finite"),
+])
+def test_design_api_arguments_are_one_clear_line_and_change_nothing(addon, call, message):
+    """Issue 20 item 18: raw TypeErrors for strings and None, RuntimeWarnings for inf."""
+    import warnings
+
+    scene = bpy.context.scene
+    api.set_coefficients(scene, KNOWN)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning fails the test
+        with pytest.raises(api.DesignError, match=message):
+            call(scene)
+    assert_array_equal(api.get_coefficients(scene), KNOWN)

@@ -12,11 +12,14 @@ Compute from World uses, so they see exactly what it sees (Strength and rotation
 evaluated at the current frame, pixels decoded as Blender renders them).
 """
 
+import math
 from dataclasses import dataclass
+from numbers import Real
 
 import numpy as np
 
 from ...core import edits, windowing
+from ...core.coefficients import type_name
 from ...core.colour import luminance_weights
 from ...core.minimum import irradiance_minimum, negative_light_warning
 from ...core.rotation import rotate_coefficients
@@ -38,6 +41,21 @@ BANDS = {"ALL": None, "AMBIENT": (0,), "DIRECTIONAL": (1,), "QUADRATIC": (2,), "
 
 class DesignError(ValueError):
     """A design tool cannot run on this scene; the message says why and what to do."""
+
+
+MAX_STOPS = 256.0  # 2^±256 takes any float32 lighting out of range: no exposure beyond it
+
+
+def _number(value, what, hint):
+    """``value`` as a finite float, or a DesignError "what is ...: hint" (issue 20 item 18:
+    a string was a raw TypeError, inf a RuntimeWarning and NaN lighting)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, Real):
+        shown = type_name(value) if value is None else f"{type_name(value)} ({value!r})"
+        raise DesignError(f"{what} is {shown}, not a number: {hint}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise DesignError(f"{what} is {number!r}, not a finite number: {hint}")
+    return number
 
 
 # -- the scene's coefficients ------------------------------------------------------------------
@@ -67,11 +85,19 @@ def _edit(scene, function, *args, **kwargs):
 
 def rotate(scene, yaw=0.0, pitch=0.0, roll=0.0):
     """Turn the lighting by yaw (about +Z), pitch (+X), roll (+Y), radians (``core.edits``)."""
-    return _edit(scene, edits.rotate, yaw, pitch, roll)
+    hint = "give an angle in radians (math.radians(90) for 90°)"
+    angles = [_number(v, w, hint) for v, w in zip((yaw, pitch, roll), ("yaw", "pitch", "roll"))]
+    return _edit(scene, edits.rotate, *angles)
 
 
 def exposure(scene, stops):
     """L' = 2^stops L. Returns the stored (9, 3) coefficients."""
+    stops = _number(stops, "stops", "give photographic stops, e.g. 1 (twice as bright)")
+    if abs(stops) > MAX_STOPS:
+        raise DesignError(
+            f"stops is {stops:g}: 2^{stops:g} takes the lighting beyond float32; give at most "
+            f"±{MAX_STOPS:g} stops"
+        )
     return _edit(scene, edits.exposure, stops)
 
 
@@ -86,12 +112,15 @@ def saturation(scene, amount, band=None):
         band = BANDS[band]
     elif isinstance(band, (int, np.integer)):
         band = (int(band),)
+    amount = _number(amount, "amount", "give a factor, 0 grey, 1 unchanged, 2 twice as colourful")
     return _edit(scene, edits.saturation, amount, band, luminance())
 
 
 def band_gains(scene, ambient=1.0, directional=1.0, quadratic=1.0):
     """Scale band l = 0, 1, 2 by ``ambient``, ``directional``, ``quadratic``."""
-    return _edit(scene, edits.band_gains, ambient, directional, quadratic)
+    factors = [_number(v, w, "give a factor, 1 unchanged") for v, w in zip(
+        (ambient, directional, quadratic), ("ambient", "directional", "quadratic"))]
+    return _edit(scene, edits.band_gains, *factors)
 
 
 def flip_vertical(scene):
@@ -208,7 +237,14 @@ def _percent(mean, largest):
 
 
 def window_for(kind, coeffs, width=DEFAULT_WIDTH):
-    """The band factors (3,) of window ``kind`` (``WINDOWS``) for ``coeffs``."""
+    """The band factors (3,) of window ``kind`` (``WINDOWS``) for ``coeffs``; ``width`` > 0,
+    inf for no window (``core.windowing``)."""
+    hint = f"give a window width > 0, e.g. {DEFAULT_WIDTH:g} (inf: no window)"
+    if not (isinstance(width, Real) and not isinstance(width, (bool, np.bool_))
+            and width == math.inf):
+        width = _number(width, "width", hint)
+    if not width > 0:
+        raise DesignError(f"width is {width:g}: {hint}")
     if kind == "HANNING":
         return windowing.hanning_window(width)
     if kind == "LANCZOS":

@@ -103,6 +103,43 @@ def draw_sphere(layout, context, coeffs):
         row.label(text=sphere_caption(stops))
 
 
+def draw_problems(layout, context):
+    """What is wrong with the scene's coefficient and gain properties (``scene_data.problems``:
+    text, a dict, NaN... put there by a script or a key), with Repair; True if anything is."""
+    found = scene_data.problems(context.scene)
+    for _name, message in found:
+        wrapped(layout, context, message, icon="ERROR")
+    if found:
+        layout.operator(SHLIGHT_OT_repair.bl_idname, icon="TOOL_SETTINGS")
+    return bool(found)
+
+
+class SHLIGHT_OT_repair(bpy.types.Operator):
+    """Write a valid value over each invalid SH coefficient or gain property: a gain 1, a
+    coefficient its Reset value (else 0). Keyframed or driven ones are fixed in their
+    keyframes or driver"""
+
+    bl_idname = "shlight.repair"
+    bl_label = "Repair"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or not scene_data.problems(context.scene):
+            cls.poll_message_set("Every SH coefficient and gain property is valid")
+            return False
+        return True
+
+    def execute(self, context):
+        try:
+            repaired = scene_data.repair(context.scene)
+        except ValueError as error:
+            self.report({"ERROR"}, f"Nothing repaired: {error}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Repaired {', '.join(repaired)}")
+        return {"FINISHED"}
+
+
 def draw_main(layout, context):
     """Sphere, Compute / Reset, capture width (procedural worlds), Apply / Remove."""
     scene = context.scene
@@ -110,7 +147,8 @@ def draw_main(layout, context):
     layout.use_property_split = True
     layout.use_property_decorate = False
     if scene_data.has_coefficients(scene):
-        draw_sphere(layout, context, scene_data.get_coefficients(scene))
+        if not draw_problems(layout, context):
+            draw_sphere(layout, context, scene_data.get_coefficients(scene))
 
     row = layout.row(align=True)
     row.scale_y = 1.2
@@ -147,6 +185,8 @@ def draw_coefficients(layout, context):
     if not scene_data.has_coefficients(scene):
         wrapped(layout, context, "No coefficients yet: press Compute from World or load a "
                 "preset (header menu)", icon="INFO")
+        return
+    if draw_problems(layout, context):
         return
     coeffs = scene_data.get_coefficients(scene)
     shown = getattr(context.window_manager, SHOW_CHANNELS, (False,) * 9)
@@ -243,6 +283,7 @@ SHLIGHT_PT_world_coefficients, SHLIGHT_PT_view3d_coefficients = sub_panels(
 
 classes = (
     SHLIGHT_OT_show_channels,
+    SHLIGHT_OT_repair,
     SHLIGHT_PT_world,
     SHLIGHT_PT_world_coefficients,
     SHLIGHT_PT_view3d,

@@ -317,9 +317,28 @@ def _original(datablock):
     return getattr(datablock, "original", None) or datablock
 
 
+def _tag_driver_targets(world):
+    """Tag the IDs that drivers of ``world`` and its node tree read, so that the next
+    evaluation runs those drivers again (issue 20 item 15: a custom property set from Python,
+    ``scene["k"] = 3``, tags nothing, and after a render the depsgraph kept the driven
+    Strength of the old value, while the next render, with a depsgraph of its own, shows the
+    new one). A tag changes no data."""
+    for owner in (world, world.node_tree):
+        animation = getattr(owner, "animation_data", None) if owner is not None else None
+        if animation is None:
+            continue
+        for curve in animation.drivers:
+            for variable in curve.driver.variables:
+                for target in variable.targets:
+                    if target.id is not None:
+                        target.id.update_tag()
+
+
 def _evaluated_world(scene, depsgraph):
-    """``scene.world`` as the depsgraph evaluates it at the scene's current frame."""
+    """``scene.world`` as the depsgraph evaluates it at the scene's current frame (drivers
+    run again when no ``depsgraph`` is given: what the next render shows)."""
     if depsgraph is None:
+        _tag_driver_targets(scene.world)
         context = bpy.context
         if context.scene == scene and context.view_layer is not None:
             depsgraph = context.evaluated_depsgraph_get()
