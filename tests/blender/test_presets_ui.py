@@ -173,6 +173,41 @@ def test_metadata_names_the_world_image_while_the_values_are_the_computed_ones(a
     assert "source" not in metadata and "strength" not in metadata
 
 
+def test_gltf_export_refuses_to_pair_one_image_s_coefficients_with_another_s_cube(
+        addon, tmp_path):
+    """Issue 20 item 11: computed from A, the world switched to B: the cube was B's, the
+    metadata A's. Now the export says so and writes nothing; computed again, it pairs B
+    with B."""
+    from sh_lighting.blender.world import compute
+
+    scene = bpy.context.scene
+    world = bpy.data.worlds.new("W")
+    if world.node_tree is None:
+        world.use_nodes = True
+    tree = world.node_tree
+    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    texture = tree.nodes.new("ShaderNodeTexEnvironment")
+    texture.image = bpy.data.images.load(str(write_constant_exr(tmp_path / "a.exr", (1,) * 3)))
+    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
+    scene.world = world
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+    assert compute.world_match(scene).source is not None
+    texture.image = bpy.data.images.load(str(write_constant_exr(tmp_path / "b.exr", (4,) * 3)))
+    match = compute.world_match(scene)
+    assert match.source is None and match.stale
+    assert "image 'b.exr' now, 'a.exr' then" in match.reason
+    out = tmp_path / "env.gltf"
+    with pytest.raises(ValueError, match=(
+            r"^the coefficients were computed from image 'a.exr' of world 'W', and it changed "
+            r"since Compute from World: image 'b.exr' now, 'a.exr' then.*: the specular cube "
+            r"would not match them; press Compute from World")):
+        preset_io.export_preset(scene, out, "gltf")
+    assert not out.exists()
+    assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
+    text = preset_io.export_preset(scene, out, "gltf").read_text()
+    assert '"specular_source": "world image"' in text and "b.exr" in text
+
+
 # --- refusals and atomic writes ------------------------------------------------------------
 
 

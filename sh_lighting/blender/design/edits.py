@@ -29,6 +29,7 @@ from ...core.world_map import (
     mapping_rotation,
 )
 from .. import compat, scene_data
+from ..world import compute
 from ..world import reader as world
 
 # Normals at which a window's error is measured against the world (brute force, eq. 1).
@@ -254,38 +255,19 @@ def window_for(kind, coeffs, width=DEFAULT_WIDTH):
     raise DesignError(f"unknown window {kind!r}: use one of {', '.join(WINDOWS)}")
 
 
-def _computed_from(scene, coeffs, image):
-    """Whether ``coeffs`` are exactly what Compute from World stored from ``image`` (a
-    ``world.ImageSource``) as it reads now: told by the stored Reset values and their
-    provenance (``compute.world_provenance``), nothing re-projected."""
-    computed = scene_data.get_computed(scene)
-    record = scene_data.computed_provenance(scene)
-    if computed is None or not np.array_equal(computed, coeffs) or record.get("sun"):
-        return False
-    rotation = image.rotation if image.rotation is not None else (0.0, 0.0, 0.0)
-    return (
-        record.get("method") == "IMAGE" and record.get("world") == image.world
-        and record.get("image") == image.image.name
-        and record.get("working_space") == image.working_space
-        and record.get("strength") == image.strength
-        and list(record.get("rotation", ())) == [float(v) for v in rotation]
-    )
-
-
 def _world_costs(scene, coeffs, kind, window, width):
     """({kind: WindowCost} of every window against the world image, ""), or ({}, why not)."""
     try:
         image = _world_image(scene, "the error against the world")
-        pixels = image.pixels()
     except DesignError:
         return {}, "no error vs the world shown: it is not an equirectangular world image"
     except ValueError as why:  # WorldError: no world, missing image, ...
         return {}, f"no error vs the world shown: {why}"
-    if not _computed_from(scene, coeffs, image):
-        return {}, (
-            "no error vs the world shown: the coefficients are not the world's as it is now "
-            "(edited, split or loaded since Compute from World, or the world changed)"
-        )
+    match = compute.world_match(scene)
+    if match.source is None or match.record.get("sun"):
+        why = match.reason or "lights were extracted from the world"
+        return {}, f"no error vs the world shown: the coefficients are not the world's ({why})"
+    pixels = image.pixels()
     normals = spread_normals(COST_NORMALS)
     truth = map_irradiance(pixels, normals, image.strength, image.rotation)
     costs = {}

@@ -58,6 +58,7 @@ from ...formats.interop import to_filament_sh_txt, to_threejs_json
 from ...formats.presets import PresetError, preset_to_json, read_preset
 from .. import compat, scene_data
 from ..world import reader as world_module
+from ..world.compute import world_match
 
 PRESET_SUBDIR = "sh_lighting"
 PRESET_EXTENSION = ".json"
@@ -143,12 +144,7 @@ def scene_metadata(scene):
     those (nothing is read from the world now, which may have changed since).
     """
     metadata = {"created": date.today().isoformat()}
-    computed = scene_data.get_computed(scene)
-    if computed is None or not scene_data.has_coefficients(scene):
-        return metadata
-    if not np.array_equal(computed, scene_data.get_coefficients(scene)):
-        return metadata  # edited or loaded since: the world is not their source
-    record = scene_data.provenance(scene)
+    record = world_match(scene).record  # {} when edited or loaded since: not the world's
     if record.get("source") != "WORLD" or "edit" in record or record.get("method") != "IMAGE":
         return metadata
     # the file name only: an absolute local path would leak into files people share
@@ -196,24 +192,27 @@ def _filament_frame_id(frame):
 
 
 def world_environment(scene):
-    """(pixels, strength, Mapping Euler) of ``scene``'s world image (``world.read_world``;
-    pixels in the file's working space) when its coefficients are exactly the ones last
-    computed from that world and it is an equirect Environment Texture read directly; else
-    None (the glTF specular cube then comes from the 9 terms).
+    """(pixels, strength, Mapping Euler) of ``scene``'s world image (pixels in the file's
+    working space) when its coefficients are exactly the ones computed from the world as it
+    is now (``compute.world_match``) and it is an equirect image; None when they are not the
+    world's (edited, loaded, a capture: the glTF specular cube then comes from the 9 terms).
+    A ValueError when they were computed from a world image that has changed since (issue
+    20 item 11: the cube would be the new image's, the coefficients the old one's).
     """
-    computed = scene_data.get_computed(scene)
-    if computed is None or not scene_data.has_coefficients(scene):
+    match = world_match(scene)
+    if match.stale:
+        raise ValueError(
+            f"the coefficients were computed from image '{match.record.get('image')}' of "
+            f"world '{match.record.get('world')}', and {match.reason.replace('the world', 'it', 1)}"
+            ": the specular cube would not match them; press Compute from World (or switch "
+            "the world back) and export again"
+        )
+    source = match.source
+    if source is None or source.projection != "EQUIRECTANGULAR":
         return None
-    if not np.array_equal(computed, scene_data.get_coefficients(scene)):
-        return None  # edited or loaded since: the world image is not this lighting
     try:
-        source = world_module.read_world(scene)
-        if not isinstance(source, world_module.ImageSource):
-            return None  # a procedural world: no image
-        if source.projection != "EQUIRECTANGULAR":
-            return None
         return source.pixels(), source.strength, source.rotation
-    except world_module.WorldError:  # a broken world or no pixel data: no image
+    except world_module.WorldError:  # no pixel data: no image
         return None
 
 

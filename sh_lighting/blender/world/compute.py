@@ -9,8 +9,10 @@ image (it hashed every byte) and ~260 lines of signatures.
 
 import numbers
 import os
+from dataclasses import dataclass, field
 
 import bpy
+import numpy as np
 
 from .. import preferences, properties, scene_data
 from ..design import lights
@@ -93,3 +95,72 @@ def _whole(capture_width):
             f"capture_width is {capture_width!r}: give a whole number of pixels, such as 256"
         )
     return int(capture_width)
+
+
+# -- do the stored values come from the world as it is now? -----------------------------------
+
+
+@dataclass(frozen=True)
+class WorldMatch:
+    """What ``world_match`` found.
+
+    record: the provenance of the Reset values when the scene's coefficients are exactly
+    those ({} otherwise: edited, loaded or never computed); source: the world's
+    ``ImageSource`` as it reads now when it is the image, world, Strength, Mapping rotation
+    and working space ``record`` names (else None); reason: why ``source`` is None ("" when
+    it is not); stale: True when the values are the ones computed from a world image but the
+    world now reads differently (an export pairing them with the world would mix two).
+    """
+
+    record: dict = field(default_factory=dict)
+    source: object = None
+    reason: str = ""
+    stale: bool = False
+
+
+def world_match(scene):
+    """Whether ``scene``'s coefficients are exactly what Compute from World stored from its
+    world as the world reads now (``world.read_world``: image, file, projection, Strength and
+    Mapping rotation as evaluated at the current frame, working space): the one check for
+    the glTF export's specular cube, the exported metadata and the windows' error against
+    the world. Nothing is re-projected. Returns a ``WorldMatch``.
+    """
+    computed = scene_data.get_computed(scene)
+    if computed is None or not scene_data.has_coefficients(scene):
+        return WorldMatch(reason="nothing was computed from the world")
+    if not np.array_equal(computed, scene_data.get_coefficients(scene)):
+        return WorldMatch(reason="the coefficients were edited, loaded or split since "
+                          "Compute from World")
+    record = scene_data.computed_provenance(scene)
+    if record.get("method") != "IMAGE":
+        return WorldMatch(record, reason="they were computed from a capture, not an image")
+    try:
+        source = world.read_world(scene)
+    except world.WorldError as why:
+        return WorldMatch(record, reason=f"the world cannot be read now: {why}", stale=True)
+    if not isinstance(source, world.ImageSource):
+        return WorldMatch(record, reason=f"world '{source.world}' is no longer an image "
+                          f"({source.reason})", stale=True)
+    changed = _changes(record, source)
+    if changed:
+        return WorldMatch(record, reason="the world changed since Compute from World: "
+                          + "; ".join(changed), stale=True)
+    return WorldMatch(record, source)
+
+
+def _changes(record, source):
+    """What differs between provenance ``record`` and the ``ImageSource`` read now."""
+    rotation = [float(v) for v in (source.rotation or (0.0, 0.0, 0.0))]
+    now = {"world": source.world, "image": source.image.name,
+           "projection": source.projection, "working_space": source.working_space,
+           "strength": float(source.strength), "rotation": rotation}
+    if "path" in record:
+        image = source.image
+        now["path"] = os.path.normpath(bpy.path.abspath(image.filepath, library=image.library))
+    changed = []
+    for key, value in now.items():
+        then = record.get(key)
+        then = list(then) if key == "rotation" and then is not None else then
+        if key in record and then != value:
+            changed.append(f"{key.replace('_', ' ')} {value!r} now, {then!r} then")
+    return changed
