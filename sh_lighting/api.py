@@ -25,6 +25,7 @@ edits (``rotate``, ``match_mapping``, ``exposure``, ``saturation``, ``band_gains
 
 import bpy
 
+from .blender import photo as _photo
 from .blender import scene_data as _scene_data
 from .blender.design.edits import (  # lighting design: exact edits and windows
     DesignError,
@@ -73,6 +74,8 @@ __all__ = [
     "extract_lights",
     # precomputed radiance transfer (shadows and bounce light)
     "TransferError", "bake_transfer", "transfer_status", "apply_transfer", "delete_transfer",
+    # lighting from a photo of a grey ball
+    "coefficients_from_photo", "photo_exposure",
 ]
 
 TransferError = _transfer.TransferError
@@ -138,6 +141,30 @@ def compute_from_world(scene, capture_width=None):
     return _compute.compute_and_store(scene, capture_width)[0]  # also deletes extracted lights
 
 
+def coefficients_from_photo(scene, path, circle, **options):
+    """Fit the lighting to a photo of a grey (matte) ball and store it on ``scene``
+    (provenance "PHOTO": file, circle, camera, the fit's report).
+
+    ``circle``: (cx, cy, r), the ball's centre and radius in pixels from the photo's top-left
+    corner. ``options`` (``blender.photo.coefficients_from_photo``): ``camera_object``
+    (default the scene's camera) or ``direction`` and ``roll`` with ``projection``
+    ("ORTHO"/"PERSP"), ``focal_mm``, ``sensor_mm``; ``albedo`` (0.18), ``margin`` (0.05 of
+    the radius), ``prior`` ("mirror", "ambient", "none"), ``clip``, ``store`` (True).
+    Returns (the (9, 3) coefficients, the ``core.photo.PhotoFit`` report: residual,
+    condition, weak_terms, used, clipped, summary()); a ValueError with one line, the scene
+    unchanged, when the photo cannot give lighting.
+    """
+    return _photo.coefficients_from_photo(scene, path, circle, **options)
+
+
+def photo_exposure(scene, fit):
+    """Both balls: how a grey-ball ``fit`` (from ``coefficients_from_photo``) compares with
+    the scene's world (a chrome ball's mirror-ball image, or an HDRI): ``.scale``, the
+    exposure making the grey ball's L00 agree, and ``.seen``/``.everywhere``, how far the
+    rest then disagree (RMS of E, / its mean); ``summary()`` says it in one line."""
+    return _photo.exposure_against_world(scene, fit)
+
+
 def get_coefficients(scene):
     """The scene's (9, 3) float64 lighting L_lm = s_lm · c_lm (each coefficient's gain times
     its RGB custom property); a LookupError if they were never set."""
@@ -146,7 +173,7 @@ def get_coefficients(scene):
 
 def get_provenance(scene):
     """Where the stored values came from, as recorded when they were stored: a dict with
-    "source" ("WORLD", "PRESET" or "SCRIPT") and what is known of it ({} if unknown)."""
+    "source" ("WORLD", "PRESET", "SCRIPT" or "PHOTO") and what is known of it ({} if unknown)."""
     return _scene_data.provenance(scene)
 
 

@@ -8,12 +8,13 @@ from . import command, preferences, properties
 from .ui import design as design_ui
 from .ui import lights as lights_ui
 from .ui import operators, panels
+from .ui import photo as photo_ui
 from .ui import presets as presets_ui
 from .ui import transfer as transfer_ui
 
 MODULES = (
     preferences, properties, operators, panels, presets_ui, design_ui, lights_ui, transfer_ui,
-    command,
+    photo_ui, command,
 )
 
 

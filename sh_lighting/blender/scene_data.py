@@ -13,7 +13,7 @@ on a render farm); all are keyframable and undoable like any property:
   ``scene["sh_computed_provenance"]`` their provenance;
 * ``scene["sh_provenance"]``: where the stored values came from, recorded when known by the
   writer (``store``), never guessed afterwards: a dict with "source" ("WORLD", "PRESET",
-  "SCRIPT") and what is known of it (world and image, preset name and path, ...), plus
+  "SCRIPT", "PHOTO") and what is known of it (world and image, preset name and path, ...), plus
   "edit" (the last design edit) once the values were edited by a design tool.
 
 ``store(scene, coeffs, provenance)`` validates, writes c = coeffs and s = 1, records the
@@ -58,7 +58,7 @@ GAIN_NAMES = tuple(name + "_gain" for name in PROPERTY_NAMES)
 COMPUTED_PROPERTY = "sh_computed"
 PROVENANCE_PROPERTY = "sh_provenance"
 COMPUTED_PROVENANCE_PROPERTY = "sh_computed_provenance"
-SOURCES = ("WORLD", "PRESET", "SCRIPT")
+SOURCES = ("WORLD", "PRESET", "SCRIPT", "PHOTO")
 
 # Soft limits of a channel: ±SOFT_RANGE × the largest magnitude of the stored values (a drag
 # across the field spans a few times the lighting), at least SOFT_FLOOR.

@@ -174,12 +174,18 @@ def test_hidden_quarter_is_less_well_conditioned_and_the_report_names_weak_terms
     assert "poorly constrained: " in full.summary() and "unseen side: none" in full.summary()
 
 
+def ball_fit_noise_free():
+    return fit_photo(ball_picture(LIGHT, SIZE, SIZE, CIRCLE, FRONT), CIRCLE, FRONT).noise
+
+
 def test_noise_raises_the_residual_not_the_seen_error_much():
     rng = np.random.default_rng(1)
     picture = ball_picture(LIGHT, SIZE, SIZE, CIRCLE, FRONT)
     noisy = picture * (1.0 + 0.02 * rng.standard_normal(picture.shape))
     fit = fit_photo(noisy, CIRCLE, FRONT, prior="none")
     assert 0.015 < fit.residual < 0.025  # 2 % noise per pixel
+    assert fit.noise == pytest.approx(fit.residual, rel=0.15)  # all of it is noise
+    assert ball_fit_noise_free() < 1e-3  # a smooth picture's curvature only
     seen = relative_rms(irradiance(fit.plain, fit.normals), irradiance(LIGHT, fit.normals))
     assert seen < 0.002  # averaged over ~5,000 pixels
 

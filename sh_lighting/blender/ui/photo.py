@@ -1,0 +1,144 @@
+"""Match Photo in the UI: the operator (a dialog of its settings) and its sub-panel.
+
+The settings are the operator's own properties (Blender remembers the last ones used in the
+session): nothing transient is stored in the scene; what was fitted is recorded in the
+stored coefficients' provenance ("PHOTO").
+"""
+
+import bpy
+
+from ...core.photo import DEFAULT_ALBEDO, DEFAULT_MARGIN, PRIORS
+from .. import photo
+from .panels import sub_panels
+from .polls import scene_poll
+
+PRIOR_ITEMS = (
+    ("mirror", "Mirror", "The unseen side is the seen side mirrored through the plane "
+                         "perpendicular to the view axis"),
+    ("ambient", "Ambient", "The unseen side is lit by the seen side's mean, a constant"),
+    ("none", "None", "No prior: the least-squares fit extrapolated (often far off and "
+                     "negative on the unseen side; lifted to non-negative light)"),
+)
+assert tuple(item[0] for item in PRIOR_ITEMS) == PRIORS
+CAMERA_ITEMS = (
+    ("SCENE", "Scene Camera", "The photo was taken from the scene's camera: its orientation, "
+                              "projection, lens and sensor"),
+    ("DIRECTION", "Direction", "The photo was taken looking along a direction, with a roll"),
+)
+PROJECTION_ITEMS = (
+    ("ORTHO", "Orthographic", "Parallel view rays (a long lens far away)"),
+    ("PERSP", "Perspective", "View rays through a lens of the focal length and sensor below"),
+)
+# A residual above this (of the mean) is reported as a warning: the ball may not be matte
+# or the circle may be off (the fit is still stored; above core.photo.MAX_RESIDUAL with
+# little explained, it is refused).
+WARN_RESIDUAL = 0.1
+
+
+class SHLIGHT_OT_match_photo(bpy.types.Operator):
+    """Compute the SH lighting from a photo of a grey (matte) ball: the nine coefficients
+    that best reproduce the ball's pixels, the unseen side filled by the chosen prior"""
+
+    bl_idname = "shlight.match_photo"
+    bl_label = "Match Photo"
+    bl_options = {"REGISTER", "UNDO"}
+
+    filepath: bpy.props.StringProperty(
+        name="Photo", subtype="FILE_PATH",
+        description="The photo of the grey ball (8-bit sRGB PNG or JPEG, or linear EXR/HDR)")
+    circle: bpy.props.FloatVectorProperty(
+        name="Circle", size=3, default=(0.0, 0.0, 0.0), min=0.0, soft_max=8192.0,
+        description="The ball in the photo: centre X and Y (pixels from the top-left "
+                    "corner) and radius, in pixels")
+    albedo: bpy.props.FloatProperty(
+        name="Albedo", default=DEFAULT_ALBEDO, min=0.001, max=1.0, subtype="FACTOR",
+        description="The ball's diffuse reflectance (a grey card ball: 0.18)")
+    margin: bpy.props.FloatProperty(
+        name="Rim Margin", default=DEFAULT_MARGIN, min=0.0, max=0.5, subtype="FACTOR",
+        description="Fraction of the radius left out at the rim (pixels there mix ball and "
+                    "background)")
+    prior: bpy.props.EnumProperty(
+        name="Unseen Side", items=PRIOR_ITEMS, default="mirror",
+        description="What lights the side of the ball the photo does not see")
+    camera: bpy.props.EnumProperty(
+        name="Camera", items=CAMERA_ITEMS, default="SCENE",
+        description="Where the photo was taken from")
+    direction: bpy.props.FloatVectorProperty(
+        name="View Direction", size=3, default=(0.0, 1.0, 0.0), subtype="DIRECTION",
+        description="World direction the photo looks along (towards the ball)")
+    roll: bpy.props.FloatProperty(
+        name="Roll", default=0.0, subtype="ANGLE", description="Roll about the view direction")
+    projection: bpy.props.EnumProperty(
+        name="Projection", items=PROJECTION_ITEMS, default="ORTHO",
+        description="How the photo projects the ball (with a view direction)")
+    focal_mm: bpy.props.FloatProperty(
+        name="Focal Length", default=85.0, min=1.0, soft_max=600.0, unit="CAMERA",
+        description="Lens focal length in mm (perspective, with a view direction)")
+    sensor_mm: bpy.props.FloatProperty(
+        name="Sensor", default=36.0, min=1.0, soft_max=100.0, unit="CAMERA",
+        description="Sensor size along the photo's longer side, in mm")
+    clip: bpy.props.FloatProperty(
+        name="Clip Above", default=0.0, min=0.0, soft_max=100.0,
+        description="Also leave out pixels with a linear channel at or above this (0: only "
+                    "the file's own clipping, a byte of 255 in an 8-bit photo)")
+
+    @classmethod
+    def poll(cls, context):
+        return scene_poll(cls, context)
+
+    def invoke(self, context, event):
+        return context.window_manager.invoke_props_dialog(self, width=360)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(self, "filepath")
+        layout.prop(self, "circle")
+        layout.prop(self, "albedo")
+        layout.prop(self, "margin")
+        layout.prop(self, "prior")
+        layout.prop(self, "clip")
+        layout.prop(self, "camera")
+        if self.camera == "DIRECTION":
+            layout.prop(self, "direction")
+            layout.prop(self, "roll")
+            layout.prop(self, "projection")
+            if self.projection == "PERSP":
+                layout.prop(self, "focal_mm")
+                layout.prop(self, "sensor_mm")
+
+    def execute(self, context):
+        if not self.filepath:
+            self.report({"ERROR"}, "No photo: give the path of the grey ball's photo")
+            return {"CANCELLED"}
+        direction = tuple(self.direction) if self.camera == "DIRECTION" else None
+        try:
+            _coeffs, fit = photo.coefficients_from_photo(
+                context.scene, self.filepath, tuple(self.circle), direction=direction,
+                roll=self.roll, projection=self.projection, focal_mm=self.focal_mm,
+                sensor_mm=self.sensor_mm, albedo=self.albedo, margin=self.margin,
+                prior=self.prior, clip=self.clip if self.clip > 0.0 else None)
+        except (LookupError, ValueError) as error:
+            self.report({"ERROR"}, f"Match Photo: {error}")
+            return {"CANCELLED"}
+        kind = {"WARNING"} if fit.residual > WARN_RESIDUAL else {"INFO"}
+        note = (" (large: is the ball matte and the circle on it?)"
+                if fit.residual > WARN_RESIDUAL else "")
+        self.report(kind, f"SH lighting from the photo: {fit.summary()}{note}")
+        return {"FINISHED"}
+
+
+def draw_photo(layout, context):
+    """The Match Photo button and where the current values came from, if a photo."""
+    layout.operator(SHLIGHT_OT_match_photo.bl_idname, icon="IMAGE_DATA")
+    record = photo.scene_data.provenance(context.scene) if context.scene else {}
+    if record.get("source") == "PHOTO":
+        layout.label(text=f"From {record.get('file', '?')}, residual "
+                          f"{100.0 * float(record.get('residual', 0.0)):.1f} %", icon="INFO")
+
+
+SHLIGHT_PT_world_photo, SHLIGHT_PT_view3d_photo = sub_panels(
+    "photo", "Photo", draw_photo, options=("DEFAULT_CLOSED",))
+
+classes = (SHLIGHT_OT_match_photo, SHLIGHT_PT_world_photo, SHLIGHT_PT_view3d_photo)
+register, unregister = bpy.utils.register_classes_factory(classes)
