@@ -81,15 +81,17 @@ __all__ = [
 TransferError = _transfer.TransferError
 
 
-def bake_transfer(scene, objects, samples=_transfer.DEFAULT_SAMPLES, report=print):
+def bake_transfer(scene, objects, samples=_transfer.DEFAULT_SAMPLES, report=print,
+                  error_target=None):
     """Bake the transfer T_lm (Sloan, Kautz and Snyder 2002) of the meshes ``objects`` in
     ``scene`` with Cycles: per face corner, the irradiance each SH basis function gives
     through the scene's shadows and interreflection, stored in the meshes' colour attributes
     sh_T00 ... sh_T22. ``report(text)`` gets a line per basis function with its time.
+    ``error_target`` (a fraction, e.g. 0.01): choose the samples for that noise instead.
     Returns a ``BakeInfo`` (objects, corners, vertices, samples, seconds, basis_seconds,
     notes); a ``TransferError`` (nothing changed) for objects that cannot be baked
     (modifiers, linked duplicates, no faces, not meshes, hidden)."""
-    return _transfer.bake_transfer(scene, objects, samples, report)
+    return _transfer.bake_transfer(scene, objects, samples, report, error_target)
 
 
 def transfer_status(scene, obj):

@@ -51,7 +51,7 @@ inputs, and a path starting with ``//`` is relative to the .blend's folder, as i
   entries the job was split for.
 
 * ``bake-transfer [BLEND] (--out NEW.blend | --in-place) [--objects NAME ...] [--samples N]
-  [--apply [--mode KEEP_BSDF|EMISSION]] [--overwrite]``: bakes the transfer (shadows and
+  [--error-target PERCENT] [--apply [--mode KEEP_BSDF|EMISSION]] [--overwrite]``: bakes the transfer (shadows and
   bounce light, ``blender.transfer``) of the scene's meshes (or the named ones) with Cycles,
   a line per basis function with its time; ``--apply`` lights their materials by it; saves.
 

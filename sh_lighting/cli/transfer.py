@@ -31,6 +31,9 @@ def add_arguments(p, prog):
     p.add_argument("--samples", type=positive, default=DEFAULT_SAMPLES,
                    help=f"Cycles samples per corner and basis function (default "
                    f"{DEFAULT_SAMPLES}; the noise falls as 1/sqrt(samples))")
+    p.add_argument("--error-target", type=float, metavar="PERCENT",
+                   help="choose the samples for this noise of the ambient transfer instead "
+                   "(relative RMS over the corners, e.g. 1 for 1 %%; two probe bakes first)")
     p.add_argument("--apply", action="store_true",
                    help="also light the baked objects' materials by the transfer")
     add_scene(p, "scene to bake")
@@ -54,7 +57,9 @@ def run(args):
     else:
         objects = [o for o in scene.objects if o.type == "MESH" and not o.hide_render]
     try:
-        info = api.bake_transfer(scene, objects, samples=args.samples, report=say)
+        target = None if args.error_target is None else args.error_target / 100.0
+        info = api.bake_transfer(scene, objects, samples=args.samples, report=say,
+                                 error_target=target)
     except api.TransferError as error:
         raise CommandError(f"{error}; nothing saved") from None
     per_10k = info.seconds / max(info.vertices, 1) * 1e4

@@ -44,7 +44,7 @@ def test_bake_transfer_bakes_applies_and_saves(tmp_path):
 def test_bake_transfer_refusal_is_one_line_and_saves_nothing(tmp_path):
     blend = _blend(tmp_path / "scene.blend", modifier=True)
     out = tmp_path / "baked.blend"
-    result = run("bake-transfer", blend, "--samples", "4", "--out", out, timeout=300)
+    result = run("bake-transfer", blend, "--error-target", "2", "--out", out, timeout=300)
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == [
         "sh_lighting: error: 'Box' has modifiers (Bevel): the transfer is stored on the mesh "

@@ -112,21 +112,30 @@ def check_objects(scene, objects):
     return picked
 
 
-def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None):
+def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None):
     """Bake T_lm for ``objects`` in ``scene`` (see the module docstring); a ``BakeInfo``.
 
     ``report(text)`` is called with a line per basis function (its time); the window
-    manager's progress bar counts the nine bakes. A TransferError (nothing changed) if an
-    object cannot be baked or ``samples`` is not a whole number in 1 … MAX_SAMPLES.
+    manager's progress bar counts the nine bakes. ``error_target`` (a fraction): the samples
+    are chosen for that noise (``choose_samples``) instead of ``samples``. A TransferError
+    (nothing changed) if an object cannot be baked or ``samples`` is not a whole number in
+    1 … MAX_SAMPLES.
     """
     picked = check_objects(scene, objects)
-    if isinstance(samples, bool) or not isinstance(samples, int) or not 1 <= samples <= MAX_SAMPLES:
-        raise TransferError(f"samples is {samples!r}: use a whole number from 1 to {MAX_SAMPLES}")
     report = report or (lambda text: None)
     started = time.perf_counter()
+    chosen = None
+    if error_target is not None:
+        samples, probe_noise = choose_samples(scene, picked, error_target)
+        chosen = (f"{samples} samples chosen for a noise of {100 * error_target:.2g} % "
+                  f"(measured {100 * probe_noise:.2g} % at 16 samples)")
+        report(chosen)
+    if isinstance(samples, bool) or not isinstance(samples, int) or not 1 <= samples <= MAX_SAMPLES:
+        raise TransferError(f"samples is {samples!r}: use a whole number from 1 to {MAX_SAMPLES}")
     saved = _Saved(scene, picked)
     window_manager = bpy.context.window_manager
-    bakes, basis_seconds, notes = [], [], []
+    bakes, basis_seconds = [], []
+    notes = [chosen] if chosen else []
     try:
         saved.prepare(samples)
         if saved.emission_materials:
@@ -169,6 +178,37 @@ def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None):
         obj.data.update()
     return BakeInfo([o.name for o in picked], corners, vertices, samples, seconds,
                     basis_seconds, notes)
+
+
+def choose_samples(scene, objects, error_target, probe=16):
+    """(samples, probe error): the bake samples for which the noise of T_00 (relative RMS over
+    the corners) is about ``error_target`` (a fraction, e.g. 0.01).
+
+    Two bakes of the constant world at ``probe`` samples with different Cycles seeds give the
+    noise at ``probe`` (RMS of their difference / √2, relative to the RMS of their mean);
+    Monte Carlo noise falls as 1/√samples, so samples = probe · (noise / target)², clamped to
+    1 … MAX_SAMPLES. The other eight transfers are differences of bakes of the same noise, so
+    their noise is of the same size (benchmarks/REPORT.md, "Transfer", measures the result).
+    """
+    picked = check_objects(scene, objects)
+    if not (isinstance(error_target, (int, float)) and 0.0 < error_target < 1.0):
+        raise TransferError(f"error target {error_target!r}: use a fraction between 0 and 1")
+    saved = _Saved(scene, picked)
+    seed = scene.cycles.seed
+    try:
+        saved.prepare(probe)
+        runs = []
+        for offset in (0, 1):
+            scene.cycles.seed = seed + offset
+            runs.append(np.concatenate(_bake_basis(scene, saved, picked, 0)))
+    finally:
+        scene.cycles.seed = seed
+        saved.restore()
+    mean = 0.5 * (runs[0] + runs[1])
+    scale = float(np.sqrt(np.mean(mean ** 2)))
+    noise = float(np.sqrt(np.mean((runs[0] - runs[1]) ** 2) / 2.0)) / max(scale, 1e-30)
+    samples = int(np.ceil(probe * (noise / error_target) ** 2))
+    return max(1, min(MAX_SAMPLES, samples)), noise
 
 
 def _transfer(bakes):

@@ -38,6 +38,12 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
         soft_max=1024,
         description="Cycles samples per face corner and basis function (noise falls as "
                     "1/sqrt(samples))")
+    use_error_target: bpy.props.BoolProperty(
+        name="Error Target", default=False,
+        description="Choose the samples for a noise target (two short probe bakes first)")
+    error_target: bpy.props.FloatProperty(
+        name="Target", default=1.0, min=0.05, max=50.0, subtype="PERCENTAGE",
+        description="Noise of the ambient transfer, relative RMS over the corners, %")
 
     @classmethod
     def poll(cls, context):
@@ -54,8 +60,10 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
     def execute(self, context):
         objects = _selected_meshes(context)
         try:
+            target = self.error_target / 100.0 if self.use_error_target else None
             info = bake.bake_transfer(context.scene, objects, self.samples,
-                                      report=lambda text: self.report({"INFO"}, text))
+                                      report=lambda text: self.report({"INFO"}, text),
+                                      error_target=target)
         except (bake.TransferError, RuntimeError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
