@@ -308,19 +308,24 @@ def bounded_error_estimate(pixels, coeffs, count=256, reference_width=ESTIMATE_W
     power = total_power(coeffs)
     if not (power > 0.0).all():
         return None
+    normals = spread_normals(count)
+    reference, spread, size = downsampled_reference(pixels, normals, reference_width)
+    mean, largest = relative_error(irradiance(coeffs, normals), reference, power)
+    return {"mean": mean, "max": largest, "bound": float((spread / power).max()),
+            "reference_size": size}
+
+
+def downsampled_reference(pixels, normals, reference_width=ESTIMATE_WIDTH):
+    """(E, bound, size): ``reference_irradiance`` at unit ``normals`` (N, 3) of ``pixels``
+    box-downsampled by a whole factor to about ``reference_width`` wide (None: never), the
+    (3,) bound on |E − E_full| of every normal (``downsample``; 0 at full resolution) and
+    the (height, width) it was computed at."""
     a = check_pixels(pixels)
     height, width = a.shape[:2]
     factor = whole_factor(height, width, reference_width) if reference_width else 1
-    bound = 0.0
-    if factor > 1:
-        source, spread = block_downsample(a, factor, with_bound=True)
-        if not np.isfinite(source).all():
-            check_finite_pixels(a)  # names the texels; else the sums overflowed float64
-        bound = float((spread / power).max())
-    else:
-        source = a
-    normals = spread_normals(count)
-    mean, largest = relative_error(
-        irradiance(coeffs, normals), reference_irradiance(source, normals), power
-    )
-    return {"mean": mean, "max": largest, "bound": bound, "reference_size": source.shape[:2]}
+    if factor == 1:
+        return reference_irradiance(a, normals), np.zeros(3), (height, width)
+    source, spread = block_downsample(a, factor, with_bound=True)
+    if not np.isfinite(source).all():
+        check_finite_pixels(a)  # names the texels; else the sums overflowed float64
+    return reference_irradiance(source, normals), spread, source.shape[:2]
