@@ -97,4 +97,4 @@ def hdri_lights(hdri, count):
     """(``core.lights.Extraction``, the rest's (9, 3) coefficients): up to ``count`` compact
     bright sources of the HDRI taken out as lights (``core.lights.extract_lights``)."""
     extraction = extract_lights(hdri.pixels, count)
-    return extraction, check_coefficients(project_equirect(extraction.rest))
+    return extraction, check_coefficients(extraction.coefficients)  # the rest's, projected
