@@ -37,6 +37,9 @@ ROWS_PER_BLOCK = 64
 # product under it lets the threads below use the cores instead of competing with BLAS's own.
 SINGLE_CORE_PRODUCT = 1 << 18
 MAX_THREADS = 8
+# Smaller maps are summed on the calling thread: below this a second thread costs more than it
+# saves (256x128: 0.9 ms with two threads started per call, see benchmarks/REPORT.md).
+THREADED_TEXELS = 1 << 18
 
 
 def _theta_functions(max_order):
@@ -118,18 +121,38 @@ def column_sums(pixels, max_order=2, zero_nonfinite=False):
     bands; each casts blocks of its rows to float64 and multiplies them by the weights.
     """
     height, width = pixels.shape[:2]
-    cos_w, sin_w = column_weights(width, max_order)
-    weights = np.ascontiguousarray(np.concatenate([cos_w, sin_w[:, 1:]], axis=1).T)
+    weights = _stacked_column_weights(width, max_order)
     sums = np.empty((height, weights.shape[0], 3))
-    bands = np.linspace(0, height, _thread_count(height) + 1).astype(int)
+    threads = _thread_count(height) if height * width >= THREADED_TEXELS else 1
+    bands = np.linspace(0, height, threads + 1).astype(int)
     work = [(pixels, weights, sums, r0, r1, zero_nonfinite) for r0, r1 in zip(bands, bands[1:])]
     if len(work) == 1:
         _band_column_sums(*work[0])
     else:
-        with ThreadPoolExecutor(len(work)) as pool:
-            for done in [pool.submit(_quiet_band_column_sums, *w) for w in work]:
-                done.result()
+        pool = _pool(len(work))
+        for done in [pool.submit(_quiet_band_column_sums, *w) for w in work]:
+            done.result()
     return sums
+
+
+@lru_cache(maxsize=16)
+def _stacked_column_weights(width, max_order):
+    """The (2L+1, W) rows of ``_phi_functions``' column weights, contiguous, read-only: cached
+    per width (a small map's projection was mostly this and a thread pool's start)."""
+    cos_w, sin_w = column_weights(width, max_order)
+    weights = np.ascontiguousarray(np.concatenate([cos_w, sin_w[:, 1:]], axis=1).T)
+    weights.setflags(write=False)
+    return weights
+
+
+_POOLS = {}
+
+
+def _pool(threads):
+    """One long-lived pool of ``threads`` workers (starting threads per call cost ~0.5 ms)."""
+    if threads not in _POOLS:
+        _POOLS[threads] = ThreadPoolExecutor(threads, thread_name_prefix="sh_projection")
+    return _POOLS[threads]
 
 
 def _thread_count(height):
@@ -157,7 +180,7 @@ def _band_column_sums(pixels, weights, sums, r0, r1, zero_nonfinite):
     for b0 in range(r0, r1, rows):
         b1 = min(r1, b0 + rows)
         n = b1 - b0
-        g = group if n % group == 0 else 1
+        g = next(d for d in range(min(group, n), 0, -1) if n % d == 0)  # rows per product
         x = block[:n]
         x[...] = pixels[b0:b1, :, :3].transpose(0, 2, 1)
         if zero_nonfinite:
