@@ -47,8 +47,11 @@ $(BENCH_STAMP): $(STAMP) requirements-bench.txt
 	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements-bench.txt
 	touch $(BENCH_STAMP)
 
+# The speed of prefiltering, the measurement tables that tests assert bounds on, then
+# benchmarks/REPORT.md with its plots.
 bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_prefilter
+	$(PY) -m benchmarks.bench_tables
 	$(PY) -m benchmarks.report
 
 package: $(STAMP)

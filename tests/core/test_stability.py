@@ -634,16 +634,24 @@ def measure_evaluation_errors():
     return results
 
 
-def test_float32_evaluation_orders_of_eq13(capsys):
+FAMILIES = ("generic", "physical", "near-cancel")
+
+
+def evaluation_table(results):
+    """The measured errors as a text table (``make bench`` prints it:
+    benchmarks/bench_eq13_orders.py)."""
+    lines = ["float32 eq. 13, worst error in units of u = 2^-24, relative to S | S13 | |E|",
+             f"{'form':38s}" + "".join(f"{f:>30s}" for f in FAMILIES)]
+    for name in EVALUATORS:
+        cells = ("{:>8.3g} {:>8.3g} {:>10.3g}".format(*(results[f, name] / U32))
+                 for f in FAMILIES)
+        lines.append(f"{name:38s}" + "".join(f"{c:>30s}" for c in cells))
+    return "\n".join(lines)
+
+
+def test_float32_evaluation_orders_of_eq13():
     results = measure_evaluation_errors()
-    families = ("generic", "physical", "near-cancel")
-    with capsys.disabled():
-        print("\n\nfloat32 eq. 13, worst error in units of u = 2^-24, relative to S | S13 | |E|")
-        print(f"{'form':38s}" + "".join(f"{f:>30s}" for f in families))
-        for name in EVALUATORS:
-            cells = ("{:>8.3g} {:>8.3g} {:>10.3g}".format(*(results[f, name] / U32))
-                     for f in families)
-            print(f"{name:38s}" + "".join(f"{c:>30s}" for c in cells))
+    families = FAMILIES
 
     # The recommended order (e1): 1 rounding per folded coefficient, ≤ 2 per monomial, 1 per
     # product and 8 additions: ≤ γ_12 · S in every family (measured ≤ 5.5 u). The matrix form
