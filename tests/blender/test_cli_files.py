@@ -269,6 +269,7 @@ def test_render_frames_are_a_range_not_a_list():
 # --- messages --------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_folders_and_missing_files_are_told_apart(inputs, tmp_path):
     folder = tmp_path / "looks.exr"
     folder.mkdir()

@@ -76,6 +76,7 @@ def light_count(scene):
     return len([o for o in scene.objects if o.type == "LIGHT"])
 
 
+@pytest.mark.slow
 def test_reextraction_reset_split_sun_and_compute_never_double_a_light(addon, hdri_dir):
     scene = bpy.context.scene
     environment_world(scene, str(hdri_dir / "studio.exr"), 1.0)

@@ -95,6 +95,7 @@ def _apply_and_compare(s, mats, samples=256, reference_samples=256):
     return mean_deviation(kept, reference, mask), mean_deviation(emitted, reference, mask), noise
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alone", ["sphere", "plane"])
 def test_keep_bsdf_matches_path_tracing_where_nothing_occludes(gradient, alone):
     """One object alone (no occlusion, no interreflection) under a world the 9 terms hold
@@ -113,6 +114,7 @@ def test_keep_bsdf_matches_path_tracing_where_nothing_occludes(gradient, alone):
 # measured on 5.0: 0.0026 and 0.0238; on 4.2 (its Principled BSDF): 0.0122 and 0.0355
 @pytest.mark.parametrize("ior, bound", [(1.0, 0.015 if LTS else 0.01),
                                         (1.5, 0.04 if LTS else 0.03)])
+@pytest.mark.slow
 def test_glossy_sphere_keeps_its_reflections(gradient, ior, bound):
     """Metallic 0.5: half the light is reflections of the world, which KEEP_BSDF keeps. At
     IOR 1 (no dielectric specular) the diffuse weight is exact; at 1.5 the F0 stand-in for

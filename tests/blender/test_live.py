@@ -248,6 +248,7 @@ FARM_SCRIPT = textwrap.dedent(
 )
 
 
+@pytest.mark.slow
 def test_apply_keyframe_save_render_two_frames_without_the_addon(addon, tmp_path):
     scene = bpy.context.scene
     constant_world(scene, tmp_path)

@@ -352,6 +352,7 @@ def load_equirect(path):
     return pixels.reshape(height, width, 4)[::-1], image
 
 
+@pytest.mark.slow
 def test_sh_render_vs_path_traced_hdri(tmp_path, hdri_dir):
     pixels, image = load_equirect(hdri_dir / "forest.exr")
     coeffs = project_equirect(pixels)

@@ -403,6 +403,7 @@ def test_capture_renders_an_animated_world_at_the_scenes_frame():
     assert rel_err(coeffs[0], 2.0 * sqrt(pi) * 2.0 * np.array([0.1, 0.2, 0.3])) < 1e-6
 
 
+@pytest.mark.slow
 def test_sky_texture_is_lit_from_above_and_converges():
     """Nishita sky: plausible and stable across capture widths.
 
