@@ -1,5 +1,5 @@
-"""The real Blender program: Debian's Blender 4.3 in /opt/blender-gui-root (a chroot, see
-/work/shared/tools/blender-gui-root), with the extension zip built by tools/package.py and
+"""The real Blender program: Debian's Blender 4.3 in /opt/blender-gui-root (a chroot built by
+tools/blender_gui_root.sh setup; $BLENDER_GUI_ROOT elsewhere), with the extension zip built by tools/package.py and
 installed by Blender's own ``blender -b --command extension install-file``.
 
 Run there: ``blender -c sh_lighting --help`` and ``compute`` directly, then both job bundles
@@ -40,8 +40,8 @@ pytestmark = [
     pytest.mark.skipif(
         os.geteuid() != 0 or not (CHROOT / "usr" / "bin" / "blender").is_file()
         or not (CHROOT / "proc" / "self").exists() or not (CHROOT / "dev" / "null").exists(),
-        reason=f"needs root and Debian's Blender in {CHROOT}, set up by blender-gui-root "
-        "(its /proc and /dev mounted)"),
+        reason=f"needs root and Debian's Blender in {CHROOT}: run tools/blender_gui_root.sh "
+        "setup (it builds the root and mounts its /proc and /dev)"),
     pytest.mark.skipif(bpy.app.version < (5, 0, 0),
                        reason="the Blender 4.3 test runs once, in the 5.0 suite"),
 ]
