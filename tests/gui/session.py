@@ -412,7 +412,8 @@ def default_apply_mode():
     settings = bpy.context.scene.sh_lighting
     if "apply_mode" in settings.bl_rna.properties:
         return settings.bl_rna.properties["apply_mode"].default
-    return bpy.types.SHLIGHT_OT_apply.bl_rna.properties["mode"].default
+    last = bpy.context.window_manager.operator_properties_last("shlight.apply")
+    return last.bl_rna.properties["mode"].default
 
 
 def calibrate():
