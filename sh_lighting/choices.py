@@ -18,3 +18,6 @@ FILAMENT_FRAMES = {
 }
 # How Apply drives a material (blender.shading.materials); the first is the default
 APPLY_MODES = ("KEEP_BSDF", "EMISSION")
+# What lights the unseen side of a grey ball in Match Photo (core.photo.PRIORS); the first
+# is the default
+PHOTO_PRIORS = ("mirror", "ambient", "none")

@@ -55,6 +55,13 @@ inputs, and a path starting with ``//`` is relative to the .blend's folder, as i
   bounce light, ``blender.transfer``) of the scene's meshes (or the named ones) with Cycles,
   a line per basis function with its time; ``--apply`` lights their materials by it; saves.
 
+* ``from-photo IMAGE --circle CX CY R [--blend BLEND | --direction X Y Z [--roll DEG]
+  [--projection ortho|persp --lens MM --sensor MM]] [--albedo A] [--margin M]
+  [--prior mirror|ambient|none] [--clip V] [--out PRESET] [--format F] [--overwrite]``: the
+  coefficients fitted to a grey ball in a photo (``api.coefficients_from_photo``), the camera
+  the scene camera of the .blend or a view direction; prints them with the fit's residual,
+  condition, poorly constrained terms and clipped pixels; ``--out`` writes a preset.
+
 Exit status: 0 on success, 1 when a command (or any file of a batch) failed, 2 for wrong
 arguments or when the package cannot be found. Errors go to stderr as ``sh_lighting: error:``.
 
@@ -69,7 +76,7 @@ picks and saves the .blend, ``options`` holds the shared argument types, ``scrip
 import argparse
 import sys
 
-from . import apply, batch, compute, render, transfer
+from . import apply, batch, compute, photo, render, transfer
 from .report import CommandError, error_line
 
 PROG = "python -m sh_lighting"
@@ -80,6 +87,7 @@ COMMANDS = {
     "render": render,
     "batch": batch,
     "bake-transfer": transfer,
+    "from-photo": photo,
 }
 
 __all__ = ["COMMANDS", "CommandError", "PROG", "build_parser", "main", "run_blender_command"]

@@ -45,7 +45,7 @@ from .minimum import irradiance_minimum, mean_irradiance, negative_light_warning
 from .sh import COEFFICIENT_NAMES, band_of_each_coefficient, lambert_band_factors, sh_basis
 from .sh import spread_normals
 
-PRIORS = ("mirror", "ambient", "none")
+PRIORS = ("mirror", "ambient", "none")  # choices.PHOTO_PRIORS (the CLI's, without numpy)
 DEFAULT_ALBEDO = 0.18
 DEFAULT_MARGIN = 0.05  # of the radius: the rim pixels mix ball and background
 DEFAULT_PRIOR_WEIGHT = 1.0  # the most: as much as all the pixels together

@@ -1,0 +1,101 @@
+"""``from-photo IMAGE --circle CX CY R``: the 9 coefficients from a photo of a grey ball
+(``api.coefficients_from_photo``), printed with the fit's report, optionally written as a
+preset or an interop file."""
+
+import math
+
+from ..choices import FORMATS, PHOTO_PRIORS
+from .options import add_scene
+from .paths import blend_relative, check_new_file, input_file, refuse_inputs, remove_own_leftovers
+from .report import CommandError, say
+from .session import open_blend, open_file, pick_scene
+
+HELP = "coefficients from a photo of a grey (matte) ball; print them, write a preset"
+DEFAULT_ALBEDO, DEFAULT_MARGIN = 0.18, 0.05  # core.photo's (no numpy import for --help)
+
+
+def add_arguments(p, prog):
+    p.description = (
+        "Fit the 9 lighting coefficients L_lm to the pixels of a grey ball in a photo (8-bit "
+        "sRGB PNG/JPEG decoded as Blender decodes it, or linear EXR/HDR). The camera is the "
+        "scene camera of --blend (orientation, lens, sensor, orthographic or perspective), "
+        "or --direction with --roll and --projection. Prints the coefficients and the fit's "
+        "residual, condition, poorly constrained terms and clipped pixels.")
+    p.epilog = (f"example:\n  {prog} from-photo ball.png --circle 640 360 120 --blend shot.blend "
+                "--out ball.json")
+    p.add_argument("image", metavar="IMAGE", help="the photo of the grey ball")
+    p.add_argument("--circle", nargs=3, type=float, required=True, metavar=("CX", "CY", "R"),
+                   help="the ball's centre and radius in pixels from the top-left corner")
+    p.add_argument("--blend", metavar="BLEND",
+                   help=".blend whose scene camera took the photo (under blender -P: default "
+                   "the open one)")
+    add_scene(p)
+    p.add_argument("--direction", nargs=3, type=float, metavar=("X", "Y", "Z"),
+                   help="instead of a camera: the world direction the photo looks along")
+    p.add_argument("--roll", type=float, default=0.0, metavar="DEGREES",
+                   help="roll about --direction (default 0: up as close to +Z as it can be)")
+    p.add_argument("--projection", choices=("ortho", "persp"), default="ortho",
+                   help="with --direction: orthographic (default) or perspective")
+    p.add_argument("--lens", type=float, default=85.0, metavar="MM",
+                   help="with --direction --projection persp: focal length (default 85)")
+    p.add_argument("--sensor", type=float, default=36.0, metavar="MM",
+                   help="with --direction --projection persp: sensor size along the photo's "
+                   "longer side (default 36)")
+    p.add_argument("--albedo", type=float, default=DEFAULT_ALBEDO,
+                   help=f"the ball's diffuse reflectance (default {DEFAULT_ALBEDO})")
+    p.add_argument("--margin", type=float, default=DEFAULT_MARGIN,
+                   help=f"fraction of the radius left out at the rim (default {DEFAULT_MARGIN})")
+    p.add_argument("--prior", choices=PHOTO_PRIORS, default=PHOTO_PRIORS[0],
+                   help="what lights the unseen side: mirror (the seen side mirrored, the "
+                   "default), ambient (its mean), none (the fit extrapolated)")
+    p.add_argument("--clip", type=float, metavar="VALUE",
+                   help="also leave out pixels with a linear channel at or above VALUE")
+    p.add_argument("--out", metavar="PRESET", help="write the coefficients to this file")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+    p.add_argument("--format", choices=tuple(f for f in FORMATS if f != "gltf"),
+                   default="sh_lighting", help="file format of --out (as for compute; a "
+                   "photo has no environment image for gltf)")
+
+
+def run(args):
+    from .. import api
+    from ..blender.presets import files as preset_io
+    from ..core.sh import coefficient_table
+
+    image = input_file(args.image, "photo", "give the photo's image file")
+    blend = None
+    if args.blend is not None:
+        blend = open_blend(args.blend)
+    elif args.direction is None:
+        blend = open_file()
+        if blend is None:
+            raise CommandError("no camera: pass --blend (its scene camera took the photo) or "
+                               "--direction X Y Z")
+    out = blend_relative(args.out, blend, "--out")
+    if out is not None:
+        refuse_inputs(out, "--out", {"photo": image})
+        check_new_file(out, args.overwrite, what="--out")
+    scene = pick_scene(args.scene)
+    try:
+        coeffs, fit = api.coefficients_from_photo(
+            scene, image, tuple(args.circle), direction=args.direction,
+            roll=math.radians(args.roll), projection=args.projection.upper(),
+            focal_mm=args.lens, sensor_mm=args.sensor, albedo=args.albedo,
+            margin=args.margin, prior=args.prior, clip=args.clip, store=False)
+    except ValueError as error:
+        raise CommandError(f"{image}: {error}") from None
+    say(f"Photo {image}: {fit.summary()}")
+    say("Lighting coefficients L_lm (raw radiance, Blender world axes, z up):")
+    for line in coefficient_table(coeffs):
+        say(line)
+    if out is not None:
+        remove_own_leftovers(out)
+        metadata = {"name": image.stem, "notes": f"Fitted to a grey ball in {image.name}: "
+                    f"{fit.summary()}."}
+        try:
+            path = preset_io.export_coefficients(coeffs, out, args.format, args.overwrite,
+                                                 metadata)
+        except (OSError, ValueError) as error:
+            raise CommandError(str(error)) from None
+        say(f"Wrote {FORMATS[args.format][0]} {path}")
+    return 0

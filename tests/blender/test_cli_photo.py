@@ -1,0 +1,53 @@
+"""``python -m sh_lighting from-photo``: a thin call of api.coefficients_from_photo, run as a
+user runs it (a fresh process), on a computed photo of a grey ball (core.photo.ball_picture)."""
+
+import numpy as np
+import pytest
+from blender_files import write_exr
+from cli_runs import run
+
+from sh_lighting.choices import PHOTO_PRIORS
+from sh_lighting.cli import photo as cli_photo
+from sh_lighting.core import photo as core_photo
+from sh_lighting.core.ball_camera import camera_looking
+from sh_lighting.formats.presets import read_preset
+
+pytestmark = pytest.mark.blender
+LIGHT = np.array(
+    [[3.0, 2.5, 2.0], [0.5, 0.4, 0.2], [1.1, 1.0, 0.9], [-0.4, -0.2, 0.0], [0.2, 0.1, 0.0],
+     [0.0, -0.2, 0.1], [0.3, 0.3, 0.2], [0.1, 0.1, 0.3], [-0.2, 0.0, 0.2]]
+)
+
+
+def test_the_command_line_shares_the_cores_choices():
+    assert PHOTO_PRIORS == core_photo.PRIORS
+    assert (cli_photo.DEFAULT_ALBEDO, cli_photo.DEFAULT_MARGIN) == (
+        core_photo.DEFAULT_ALBEDO, core_photo.DEFAULT_MARGIN)
+
+
+def test_from_photo_prints_the_report_and_writes_the_preset(tmp_path):
+    camera = camera_looking((0.0, 1.0, 0.0))
+    picture = core_photo.ball_picture(LIGHT, 64, 64, (32, 32, 30), camera)
+    photo = write_exr(tmp_path / "ball.exr", picture)
+    out = tmp_path / "ball.json"
+    result = run("from-photo", photo, "--circle", 32, 32, 30, "--direction", 0, 1, 0,
+                 "--prior", "none", "--out", out)
+    assert result.returncode == 0, result.stderr
+    assert "residual 0.00 % of the mean" in result.stdout
+    assert "poorly constrained: L1-1+L00" in result.stdout
+    stored, metadata = read_preset(out)
+    assert "Fitted to a grey ball in ball.exr" in metadata["notes"]
+    assert np.abs(stored - LIGHT).max() < 1e-4 * np.abs(LIGHT).max()
+
+
+def test_from_photo_refuses_bad_input_in_one_line(tmp_path):
+    photo = write_exr(tmp_path / "ball.exr", np.zeros((64, 64, 3)))
+    for extra, message in [
+        (("--circle", 500, 32, 10, "--direction", 0, 1, 0), "outside the 64×64 image"),
+        (("--circle", 32, 32, 20, "--direction", 0, 1, 0), "black"),
+        (("--circle", 32, 32, 20), "no camera"),
+    ]:
+        result = run("from-photo", photo, *extra)
+        assert result.returncode == 1
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and message in lines[0], result.stderr
