@@ -163,6 +163,7 @@ def _lights(source, scene, hdri, count):
         say(f"Light {i}: Sun toward ({d}), angle {math.degrees(angle):.2f}°, colour ({c}), "
             f"strength {strength:.6g} W/m², {100 * share:.1f} % of the light")
     (before, _), (after, _) = extraction.errors[0], extraction.errors[-1]
+    why = "" if extraction.stop_kind == "COUNT" else f"; no more: {extraction.stop}"
     say(f"{len(found)} light(s) extracted: mean irradiance error {100 * before:.2f} % with SH "
-        f"alone, {100 * after:.2f} % with SH + lights (fraction of the total light)")
+        f"alone, {100 * after:.2f} % with SH + lights (fraction of the total light){why}")
     return coeffs, len(found)

@@ -102,7 +102,8 @@ class Extraction:
     vs brute force for i = 0 .. len(lights), fractions of the map's power (module docstring).
     stop_kind: why no further light was taken (``COUNT``, ``TARGET``, ``DARK``,
     ``CONTRAST_LOW``, ``TOO_LARGE``, ``TOO_DIM``, ``NO_GAIN``); stop: the same for the user, one
-    phrase with the numbers; max_radius: the size limit used (radians).
+    phrase with the numbers; max_radius: the size limit used (radians); stop_size: the size
+    across (radians) of the source found too large, when known (else 0).
     """
 
     lights: list
@@ -112,6 +113,7 @@ class Extraction:
     stop_kind: str
     stop: str
     max_radius: float
+    stop_size: float = 0.0
 
 
 def weighted_median(values, weights):
@@ -225,9 +227,9 @@ def _find_source(rgb, lum, solid, contrast, background, min_power, total, peak_f
     peak = float(lum[seed])
     floor = contrast * max(background, 0.0)
     if not peak >= floor or peak <= 0.0:
-        ratio = f"{peak / background:.3g} ×" if background > 0.0 else "not"
-        return None, (CONTRAST_LOW, f"the brightest texel left is {ratio} brighter than the "
-                      f"background, less than {contrast:g} ×")
+        ratio = f"{peak / background:.3g} ×" if background > 0.0 else "no brighter than"
+        return None, (CONTRAST_LOW, f"the brightest texel left is {ratio} the background "
+                      f"level, less than {contrast:g} ×")
     # Only rows that can hold texels within 2 max_radius of the peak are searched: a region cut
     # off there spans more than 2 max_radius, so no centre has it within max_radius.
     edges = row_edges(height)
@@ -260,7 +262,7 @@ def _find_source(rgb, lum, solid, contrast, background, min_power, total, peak_f
     spread = float(np.arccos(np.clip(directions @ toward, -1.0, 1.0)).max())
     if spread >= max_radius:
         return None, (TOO_LARGE, f"the brightest source left is {degrees(2 * spread):.3g}° "
-                      f"across, wider than {limit}")
+                      f"across, wider than {limit}", 2.0 * spread)
     mask = np.zeros((height, width), dtype=bool)
     mask[band] = region
     return (toward, moment, power, mask, fill, float(weights.sum())), None
@@ -352,7 +354,8 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
         lights.append(light)
         rest, coeffs = trial_rest, trial
         errors.append(error)
-    return Extraction(lights, rest, coeffs, errors, stop[0], stop[1], float(max_radius))
+    size = stop[2] if len(stop) > 2 else 0.0
+    return Extraction(lights, rest, coeffs, errors, stop[0], stop[1], float(max_radius), size)
 
 
 def eevee_style_split(pixels, threshold=EEVEE_SUN_THRESHOLD):

@@ -6,6 +6,7 @@ re-extraction, Reset, Split Sun and Compute never double a light; undo."""
 import math
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import bpy
 import numpy as np
@@ -24,6 +25,7 @@ from blender_scenes import (
     sunny_map,
 )
 from numpy.testing import assert_allclose
+from ui_layout import RecordingLayout
 
 from sh_lighting.blender.ui import lights as lights_ui
 from sh_lighting.blender.world.images import image_pixels
@@ -288,3 +290,167 @@ def test_cycles_renders_the_extracted_sun_where_it_was(addon, tmp_path):
     for index, cosine in enumerate(cosines):
         centre = rendered[4:6, 10 * index + 4 : 10 * index + 6].reshape(-1, 3).mean(axis=0)
         assert_allclose(centre, per_cosine * cosine, rtol=RENDER_TOLERANCE)
+
+
+# -- refusals, reports, where the lights go, the dialog ----------------------------------------
+
+
+def lights_in(scene):
+    return [o for o in scene.objects if o.type == "LIGHT"]
+
+
+@pytest.mark.parametrize("radiance, strength", [(3e38, 1000.0), (SUN_RADIANCE, 1e38)],
+                         ids=["3e38 sun x 1000", "Strength 1e38"])
+def test_a_light_beyond_float32_is_refused_and_nothing_changes(addon, tmp_path, radiance,
+                                                               strength):
+    scene = bpy.context.scene
+    sky = sky_map()
+    pixels, disc = sunny_map(sky)
+    pixels[disc] = np.float32(radiance) * SUN_RGB.astype(np.float32)
+    environment_world(scene, write_exr(tmp_path / "hot.exr", pixels), strength)
+    api.set_coefficients(scene, np.ones((9, 3)))
+    with pytest.raises(ValueError) as refused:
+        api.extract_lights(scene, count=1)
+    message = str(refused.value)
+    print(f"\n{message}")
+    assert "\n" not in message and ("float32" in message or "3.4e+38" in message)
+    assert lights_in(scene) == [] and lights.REGISTRY not in scene
+    np.testing.assert_array_equal(scene_data.get_coefficients(scene), np.ones((9, 3)))
+
+
+def test_a_world_without_blue_and_a_black_world(addon, tmp_path):
+    """No channel without light makes the errors undefined: both extract, in Blender and in
+    the command line (which said "a channel has total power ≤ 0")."""
+    scene = bpy.context.scene
+    pixels, _ = sunny_map()
+    pixels[..., 2] = 0.0
+    noblue = write_exr(tmp_path / "noblue.exr", pixels)
+    black = write_exr(tmp_path / "black.exr", np.zeros_like(pixels))
+    environment_world(scene, noblue, 1.0)
+    info = api.extract_lights(scene, count=2)
+    [name] = info.lights
+    assert scene.objects[name].data.color[2] == 0.0
+    assert info.extraction.errors[1][0] < 0.2 * info.extraction.errors[0][0]
+    environment_world(scene, black, 1.0)
+    info = api.extract_lights(scene, count=2)
+    assert info.lights == [] and "the image has no light" in info.report()
+    assert lights_in(scene) == []  # the earlier light went with the whole world in the SH
+    for path, count, found in ((noblue, "0", "0 light(s)"), (noblue, "1", "1 light(s)"),
+                               (black, "1", "no more: the image has no light")):
+        result = subprocess.run([sys.executable, "-m", "sh_lighting", "compute", path,
+                                 "--lights", count], cwd=ROOT, capture_output=True, text=True,
+                                timeout=120)
+        assert result.returncode == 0, result.stderr
+        assert found in result.stdout
+
+
+def window_map(height=128, width=256, radiance=32.5):
+    """Constant sky over ground with a bright window 18 × 18 texels (25° × 25°) on the horizon:
+    1 % of the texels. Returns (pixels, window mask)."""
+    d = texel_directions(height, width)
+    pixels = np.where(d[..., 2:] > 0.0, [0.6, 0.7, 0.9], [0.25, 0.2, 0.15]).astype(np.float32)
+    window = np.zeros((height, width), bool)
+    window[height // 2 - 12: height // 2 + 6, width // 4: width // 4 + 18] = True
+    pixels[window] = radiance
+    return pixels, window
+
+
+def test_a_bright_window_is_reported_with_what_would_take_it(addon, tmp_path):
+    """Issue 23 item 4: the window is larger than the size limit: the report says so, and
+    raising Size Limit takes it out."""
+    scene = bpy.context.scene
+    pixels, window = window_map()
+    solid = texel_solid_angles(*window.shape)[:, None]
+    luminance = pixels @ [0.2126, 0.7152, 0.0722] * solid
+    share = luminance[window].sum() / luminance.sum()
+    assert window.mean() == pytest.approx(0.01, abs=0.001) and share == pytest.approx(0.53, abs=0.02)
+    environment_world(scene, write_exr(tmp_path / "window.exr", pixels), 1.0)
+    result, reports = run_execute(lights_ui.SHLIGHT_OT_extract_lights, count=3,
+                                  use_error_target=False, error_target=0.5,
+                                  size_limit=lights.SIZE_LIMIT)
+    [(kind, message)] = reports
+    print(f"\n{message}")
+    assert result == {"FINISHED"} and kind == {"INFO"} and lights_in(scene) == []
+    assert "from 'window.exr'" in message and "no light extracted" in message
+    assert "wider than the size limit of 24°" in message
+    assert "set Size Limit to 34° or more to extract it as a light, or leave it in the SH" in message
+    wider = api.extract_lights(scene, count=3, size_limit=math.radians(34.0))
+    print(wider.report())
+    assert len(wider.lights) >= 1 and wider.extraction.lights[0].power_fraction > 0.45
+    errors = wider.extraction.errors
+    assert errors[-1][0] < 0.5 * errors[0][0]
+    with pytest.raises(ValueError, match="size limit must be above 0° and at most 120°"):
+        api.extract_lights(scene, count=1, size_limit=math.radians(130.0))
+
+
+def test_the_report_names_the_image_the_errors_and_the_time(addon, tmp_path):
+    """Issue 23 item 7."""
+    scene = bpy.context.scene
+    pixels, _ = sunny_map()
+    environment_world(scene, write_exr(tmp_path / "sunny.exr", pixels), 1.5)
+    info = api.extract_lights(scene, count=2)
+    text = info.report()
+    print(f"\n{text}")
+    (before, _), (after, _) = info.extraction.errors[0], info.extraction.errors[-1]
+    assert text.startswith(f"Extract Lights from 'sunny.exr' ({info.seconds:.2f} s): 1 light(s)")
+    assert f"{100 * before:.2f} % of its light with SH alone, {100 * after:.2f} % with SH + " \
+        "lights" in text
+    assert 0.0 < info.seconds < 60.0 and after < before
+    assert "no more: " in text  # one light asked 2: why not a second
+
+
+def test_lights_go_into_their_own_collection_near_the_cursor(addon, tmp_path):
+    """Issue 23 item 8: a collection named for the image, the lights DISTANCE from the 3D
+    cursor toward their source; re-extraction from another image renames it; Compute from
+    World removes it with the lights, but not if the artist put something in it."""
+    scene = bpy.context.scene
+    pixels, _ = sunny_map()
+    environment_world(scene, write_exr(tmp_path / "sunrise.exr", pixels), 1.5, EULER)
+    scene.cursor.location = (1.0, -2.0, 0.5)
+    [name] = api.extract_lights(scene, count=1).lights
+    obj = scene.objects[name]
+    [collection] = obj.users_collection
+    assert collection.name == "SH Lights (sunrise.exr)"
+    assert collection.name in scene.collection.children and name not in scene.collection.objects
+    toward = -minus_z(obj)
+    assert_allclose(np.array(obj.location), np.array([1.0, -2.0, 0.5]) + lights.DISTANCE * toward,
+                    atol=1e-5)
+    environment_world(scene, write_exr(tmp_path / "noon.exr", pixels), 1.5)
+    assert api.extract_lights(scene, count=1).lights == [name]
+    assert collection.name == "SH Lights (noon.exr)" and len(bpy.data.collections) == 1
+    api.compute_from_world(scene)
+    assert len(bpy.data.collections) == 0  # ours and empty: gone
+    api.extract_lights(scene, count=1)
+    [collection] = bpy.data.collections
+    mesh = bpy.data.objects.new("Artist's", None)
+    collection.objects.link(mesh)
+    api.compute_from_world(scene)
+    assert list(bpy.data.collections) == [collection] and lights_in(scene) == []
+
+
+class ActiveLayout(RecordingLayout):
+    """RecordingLayout that also records whether each field is drawn active."""
+
+    def _child(self, *args, **kwargs):
+        child = ActiveLayout(self.calls)
+        child.active = self.active
+        return child
+
+    column = row = box = split = _child
+
+    def prop(self, data, path, **kwargs):
+        self.calls.append(("prop", data, path, dict(kwargs, active=self.active)))
+
+
+def test_the_dialog_greys_the_target_while_error_target_is_off(addon):
+    """Issue 23 item 9."""
+    drawn = {}
+    for use in (False, True):
+        layout = ActiveLayout()
+        dialog = SimpleNamespace(layout=layout, use_error_target=use)
+        lights_ui.SHLIGHT_OT_extract_lights.draw(dialog, bpy.context)
+        drawn[use] = {c[2]: c[3]["active"] for c in layout.of("prop")}
+    assert list(drawn[False]) == ["count", "use_error_target", "error_target", "size_limit"]
+    assert drawn[False] == {"count": True, "use_error_target": True, "error_target": False,
+                            "size_limit": True}
+    assert all(drawn[True].values())

@@ -29,7 +29,7 @@ what was taken out of the SH, and a glossy surface does not reflect a source twi
 
 import time
 from dataclasses import dataclass
-from math import degrees
+from math import ceil, degrees
 
 import bpy
 import numpy as np
@@ -85,9 +85,13 @@ class LightsInfo:
                      f"{before:.2f} % of its light)")
         if extraction.stop_kind != core_lights.COUNT:
             text += f"; no more: {extraction.stop}"
+        largest = degrees(2.0 * core_lights.LARGEST_RADIUS)
         if extraction.stop_kind == core_lights.TOO_LARGE:
-            limit = degrees(2.0 * extraction.max_radius)
-            if limit < degrees(2.0 * core_lights.LARGEST_RADIUS):
+            limit, size = degrees(2.0 * extraction.max_radius), degrees(extraction.stop_size)
+            if size and size < largest:
+                text += (f" (set Size Limit to {ceil(size)}° or more to extract it as a light, "
+                         "or leave it in the SH)")
+            elif not size and limit < largest:
                 text += (f" (raise Size Limit above {limit:.0f}° to extract it as a light, or "
                          "leave it in the SH)")
         return text
