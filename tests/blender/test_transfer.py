@@ -140,6 +140,22 @@ def test_linked_duplicates_are_refused():
     _assert_refused([box], "'Box' shares its mesh with 'Twin' (a linked duplicate)")
 
 
+def test_an_object_drawn_by_a_collection_instance_is_refused():
+    scene, ground, box = _scene(2, 0)
+    props = bpy.data.collections.new("Props")
+    props.objects.link(box)
+    instance = bpy.data.objects.new("Props instance", None)
+    instance.instance_type = "COLLECTION"
+    instance.instance_collection = props
+    scene.collection.objects.link(instance)
+    _assert_refused([ground, box], "'Box' is also drawn elsewhere by the collection instance "
+                                   "'Props instance': the transfer fits one place only")
+    _bake([ground])
+    instance.location.x += 1.0  # the instance occludes the ground: moving it is seen
+    bpy.context.view_layer.update()
+    assert bake.status(scene, ground)[0] == "STALE"
+
+
 def test_a_mesh_without_faces_and_a_non_mesh_are_refused():
     scene, ground, box = _scene(2, 0)
     points = ts.mesh_object("Points", lambda bm: [bm.verts.new((0, 0, i)) for i in range(3)])

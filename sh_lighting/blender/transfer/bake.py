@@ -107,6 +107,15 @@ def check_objects(scene, objects):
                 "transfer depends on where each sits, so make it single user "
                 "(Object > Relations > Make Single User) and bake again"
             )
+        instancers = [o.name for o in bpy.data.objects if o.instance_type == "COLLECTION"
+                      and o.instance_collection is not None
+                      and o.instance_collection.all_objects.get(name) == obj]
+        if instancers:
+            raise TransferError(
+                f"'{name}' is also drawn elsewhere by the collection instance "
+                f"'{instancers[0]}': the transfer fits one place only, so make the instance "
+                "real (Object > Apply > Make Instances Real) or bake a copy"
+            )
     if len({o.as_pointer() for o in picked}) != len(picked):
         raise TransferError("an object is picked twice: pick each once")
     return picked
@@ -347,10 +356,12 @@ def geometry_fingerprint(obj):
 
 
 def scene_fingerprint(scene):
-    """A CRC over the scene's rendered objects: names, placement, mesh coordinates."""
+    """A CRC over the scene's rendered objects and instancers: names, placement, mesh
+    coordinates (an occluder's material or a geometry-nodes edit keeping them is not seen)."""
     crc = 0
     for obj in sorted(scene.objects, key=lambda o: o.name):
-        if obj.type not in RENDERED_TYPES or obj.hide_render:
+        instancing = obj.instance_type != "NONE"
+        if (obj.type not in RENDERED_TYPES and not instancing) or obj.hide_render:
             continue
         crc = zlib.crc32(obj.name.encode(), crc)
         crc = zlib.crc32(np.array(obj.matrix_world, dtype=np.float32).tobytes(), crc)
