@@ -188,7 +188,7 @@ def add_mapping(world, rotation):
 
 def sky_map(height=H, width=W):
     """Constant sky over constant ground: the ring around the sun is all sky, so the texels
-    Split Sun takes out get exactly the sky's value back."""
+    an extracted light takes out get exactly the sky's value back."""
     d = texel_directions(height, width)
     return np.where(d[..., 2:] > 0.0, SKY, GROUND).astype(np.float32)
 
