@@ -4,12 +4,35 @@
 ``blender.presets.files`` and ``blender.shading.materials`` take theirs from here.
 """
 
-# export format id -> (label, file extension)
+from typing import NamedTuple
+
+
+class Format(NamedTuple):
+    """An export format: its label, file extension, the ending of its default file name
+    (after the .blend's name; each format its own, so that exporting one never proposes the
+    file of another, issue 23 item 3) and what it holds (the Export operator's tooltips)."""
+
+    label: str
+    extension: str
+    default_suffix: str
+    description: str
+
+
+# export format id -> Format: the one table of the formats (CLI, API, Export operator)
 FORMATS = {
-    "sh_lighting": ("SH Lighting preset", ".json"),
-    "threejs": ("three.js LightProbe JSON", ".json"),
-    "gltf": ("glTF environment (EXT_lights_image_based)", ".gltf"),
-    "filament": ("Filament sh.txt", ".txt"),
+    "sh_lighting": Format(
+        "SH Lighting preset", ".json", "_sh_preset",
+        "SH Lighting preset: raw L_lm in Blender axes, with metadata (Import reads it)"),
+    "threejs": Format(
+        "three.js LightProbe JSON", ".json", "_threejs_lightprobe",
+        "A LightProbe for three.js (ObjectLoader JSON): radiance L_lm, y-up glTF axes"),
+    "gltf": Format(
+        "glTF environment (EXT_lights_image_based)", ".gltf", "_environment",
+        "A .gltf environment for Babylon.js: irradiance coefficients and a specular cube "
+        "prefiltered from the world image, y-up glTF axes"),
+    "filament": Format(
+        "Filament sh.txt", ".txt", "_sh",
+        "cmgen-style sh.txt for Filament: shader-ready pre-scaled irradiance"),
 }
 # Filament frame id -> what it lines up with (formats.interop); the first is the default
 FILAMENT_FRAMES = {

@@ -266,7 +266,8 @@ def test_minimal_window_makes_a_single_sun_world_non_negative_and_reports_costs(
     # edited coefficients are not the world's: no costs, and the report says why
     result = design.apply_window(scene, "HANNING")
     assert result.cost is None and not result.costs
-    assert "not the world's" in result.report()
+    assert "not the world's" in result.note
+    assert result.note in design_ui.window_report(result)
 
 
 def plain_colour_world(scene):
@@ -280,7 +281,7 @@ def test_window_cost_needs_an_image_world(addon):
     scene_data.store(scene, KNOWN, SCRIPT)
     result = design.apply_window(scene, "LANCZOS", 2.0)
     assert result.cost is None
-    assert "not an equirectangular world image" in result.report()
+    assert "not an equirectangular world image" in result.note
     assert_array_equal(result.window, windowing.lanczos_window(2.0))
 
 

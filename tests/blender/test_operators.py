@@ -445,3 +445,14 @@ def test_apply_polls_explain_why_disabled(addon):
         bpy.ops.shlight.apply()
     with pytest.raises(RuntimeError, match="No objects selected"):
         bpy.ops.shlight.remove()
+
+
+def test_compute_and_extract_lights_share_one_no_world_poll(addon):
+    """Issue 19: the no-world poll was copied per operator, with different messages."""
+    from sh_lighting.blender.ui import polls
+
+    bpy.context.scene.world = None
+    for operator in (bpy.ops.shlight.compute_from_world, bpy.ops.shlight.extract_lights):
+        with pytest.raises(RuntimeError, match=rf"{polls.NO_WORLD}$".replace("(", r"\(")
+                           .replace(")", r"\)")):
+            operator()

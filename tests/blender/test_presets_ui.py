@@ -476,24 +476,37 @@ def test_presets_sit_in_the_header_of_both_main_panels(addon):
         assert hasattr(cls, "draw_header_preset")
 
 
-def test_each_export_format_has_its_own_labelled_operator(scene, tmp_path):
-    labels = {}
-    for key, (label, extension) in preset_io.FORMATS.items():
-        cls = getattr(bpy.types, f"SHLIGHT_OT_export_{key}")
-        labels[key] = cls.bl_label
-        path, general = (tmp_path / f"{key}_{side}" / f"light{extension}" for side in "ab")
-        path.parent.mkdir()
-        general.parent.mkdir()
-        assert getattr(bpy.ops.shlight, f"export_{key}")(filepath=str(path)) == {"FINISHED"}
-        assert bpy.ops.shlight.export_preset(filepath=str(general),
-                                             export_format=key.upper()) == {"FINISHED"}
-        assert path.read_text() == general.read_text()  # the same format as the general one
-    assert labels == {"sh_lighting": "Export SH Preset", "threejs": "Export three.js LightProbe",
-                      "gltf": "Export glTF Environment", "filament": "Export Filament SH"}
+def test_one_export_operator_with_a_format_choice_and_a_default_name_per_format(
+        scene, tmp_path):
+    """Issue 19: one operator (was five); issue 23 item 3: three.js proposed the SH preset's
+    file name (the field turned red, nothing written) and its button label was cut."""
+    assert not [name for name in dir(bpy.types) if name.startswith("SHLIGHT_OT_export_")
+                and name != "SHLIGHT_OT_export_preset"]
+    assert presets_ui.SHLIGHT_OT_export_preset.bl_label == "Export"
     layout = RecordingLayout()
     presets_ui.SHLIGHT_MT_export.draw(SimpleNamespace(layout=layout), bpy.context)
-    assert [kw["text"] for _k, _op, _p, kw in layout.of("operator")] == [
-        f"{label} ({ext})" for label, ext in preset_io.FORMATS.values()]
+    entries = layout.of("operator")
+    assert [c[1] for c in entries] == [presets_ui.EXPORT] * 4
+    assert [c[2].export_format for c in entries] == ["SH_LIGHTING", "THREEJS", "GLTF", "FILAMENT"]
+    assert [c[3]["text"] for c in entries] == [
+        f"{fmt.label} ({fmt.extension})" for fmt in preset_io.FORMATS.values()]
+
+    blend = str(tmp_path / "shot.blend")
+    names = {key: presets_ui.default_file_name(blend, key) for key in preset_io.FORMATS}
+    assert names == {"sh_lighting": "shot_sh_preset.json",
+                     "threejs": "shot_threejs_lightprobe.json",
+                     "gltf": "shot_environment.gltf", "filament": "shot_sh.txt"}
+    # the user picks SH preset, exports, then picks three.js: a name of its own, both written
+    for key in preset_io.FORMATS:
+        path = tmp_path / presets_ui.default_file_name("", key)
+        assert bpy.ops.shlight.export_preset(
+            filepath=str(path), export_format=key.upper()) == {"FINISHED"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        presets_ui.default_file_name("", key) for key in preset_io.FORMATS)
+    fake = SimpleNamespace(export_format="THREEJS",
+                           filepath=str(tmp_path / "untitled_sh_preset.json"))
+    assert presets_ui.SHLIGHT_OT_export_preset.check(fake, None)
+    assert fake.filepath == str(tmp_path / "untitled_threejs_lightprobe.json")
 
 
 def test_operators_that_change_the_scene_are_undoable_and_file_ones_are_not(addon):

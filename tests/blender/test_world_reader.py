@@ -206,7 +206,7 @@ def test_window_costs_and_preset_metadata_follow_the_recorded_provenance(tmp_pat
     api.reset(scene)
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 3.0
     hidden = design.apply_window(scene, "HANNING")
-    assert not hidden.costs and "world changed" in hidden.report()
+    assert not hidden.costs and "world changed" in hidden.note
     api.reset(scene)
     metadata = preset_io.scene_metadata(scene)
     assert metadata["strength"] == 2.0 and metadata["mapping"] == pytest.approx([0, 0, 0.4])

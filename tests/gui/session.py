@@ -747,7 +747,7 @@ def file_browser():
 
 def files_and_presets():
     """Save (the dialog's name field takes typing at once), remove (the confirmation names the
-    preset), Import (opens in the .blend's folder), Export (one labelled entry per format)."""
+    preset), Import (opens in the .blend's folder), Export (one entry per format, one operator)."""
     preset_io = addon_module("presets.files")
     folder = os.path.join(SHOTS, "..", "blend")
     os.makedirs(folder, exist_ok=True)
@@ -806,9 +806,12 @@ def files_and_presets():
     browser = file_browser()
     operator = browser.spaces.active.active_operator if browser else None
     shot("export_file_browser")
-    check("Export three.js: the file browser's button names the format",
-          operator is not None and "three.js" in operator.bl_label,
-          operator=operator.bl_label if operator else None)
+    check("Export three.js: the one Export operator with three.js chosen, on a file name of "
+          "its own (not the SH preset's)",
+          operator is not None and operator.export_format == "THREEJS"
+          and os.path.basename(operator.filepath).endswith("_threejs_lightprobe.json"),
+          format=operator.export_format if operator else None,
+          filepath=operator.filepath if operator else None)
     xdo("mousemove", 960, 600)
     yield 0.3
     key("Escape")

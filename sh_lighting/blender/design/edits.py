@@ -199,8 +199,9 @@ class WindowResult:
     kind, window (3,) w_0..w_2, coefficients (9, 3) stored. costs: {kind:
     ``core.windowing.WindowCost``} of every window (the one applied and the others, for
     comparison, at the same width) against the world image's brute-force irradiance, as
-    fractions of its total light; empty, with ``note`` saying why, when the coefficients are
-    not those of an equirect world image. ``minimum``: computed only when read.
+    fractions of its total light; empty, with ``note`` saying why (the operator's report
+    says it too), when the coefficients are not those of an equirect world image.
+    ``minimum``: computed only when read.
     """
 
     kind: str
@@ -218,23 +219,6 @@ class WindowResult:
     def cost(self):
         """The ``WindowCost`` of the window applied, or None."""
         return self.costs.get(self.kind)
-
-    def report(self):
-        """One line for the user: the window and, when known, what each window costs."""
-        w = ", ".join(f"{v:.3g}" for v in self.window)
-        text = f"{LABELS[self.kind]} window ({w}) applied"
-        if not self.costs:
-            return f"{text}; {self.note}"
-        any_cost = next(iter(self.costs.values()))
-        parts = [f"none {_percent(any_cost.plain_mean, any_cost.plain_max)}"]
-        for kind, cost in self.costs.items():
-            mark = " (applied)" if kind == self.kind else ""
-            parts.append(f"{LABELS[kind]}{mark} {_percent(cost.windowed_mean, cost.windowed_max)}")
-        return f"{text}. Error vs the world image, mean / max % of its light: " + ", ".join(parts)
-
-
-def _percent(mean, largest):
-    return f"{100 * mean.max():.2f} / {100 * largest.max():.2f}"
 
 
 def window_for(kind, coeffs, width=DEFAULT_WIDTH):

@@ -245,8 +245,8 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
 
 
 def window_report(result):
-    """One readable line about a ``design.WindowResult``: the band factors and, when known,
-    the error against the world image with and without the window."""
+    """One readable line about a ``design.WindowResult``: the band factors and the error
+    against the world image with and without the window, or why it is not shown."""
     w = result.window
     text = (f"{design.LABELS[result.kind]} window applied: directional ×{w[1]:.2f}, "
             f"quadratic ×{w[2]:.2f}")
@@ -254,6 +254,8 @@ def window_report(result):
     if cost is not None:
         text += (f"; error vs the world image {100 * cost.windowed_mean.max():.1f} % of its "
                  f"light (without: {100 * cost.plain_mean.max():.1f} %)")
+    elif result.note:
+        text += f"; {result.note}"
     return text
 
 

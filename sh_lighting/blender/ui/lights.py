@@ -4,7 +4,7 @@ import bpy
 
 from ...core.lights import LARGEST_RADIUS, MAX_COUNT
 from ..design import lights
-from .polls import scene_poll
+from .polls import world_poll
 
 
 class SHLIGHT_OT_extract_lights(bpy.types.Operator):
@@ -34,12 +34,7 @@ class SHLIGHT_OT_extract_lights(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if not scene_poll(cls, context):
-            return False
-        if context.scene.world is None:
-            cls.poll_message_set("The scene has no world: give it an HDR image first")
-            return False
-        return True
+        return world_poll(cls, context)
 
     def invoke(self, context, event):
         return context.window_manager.invoke_props_dialog(self)

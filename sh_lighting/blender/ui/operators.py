@@ -13,7 +13,7 @@ import bpy
 from .. import scene_data
 from ..shading import materials
 from ..world import compute
-from .polls import coefficients_poll, scene_poll
+from .polls import coefficients_poll, scene_poll, world_poll
 
 
 def objects_for_target(context, target):
@@ -60,12 +60,7 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        if not scene_poll(cls, context):
-            return False
-        if context.scene.world is None:
-            cls.poll_message_set("The scene has no world: add one in the Scene properties")
-            return False
-        return True
+        return world_poll(cls, context)
 
     def execute(self, context):
         start = time.perf_counter()

@@ -13,6 +13,19 @@ def scene_poll(cls, context):
     return True
 
 
+NO_WORLD = "The scene has no world: add one in the Scene properties (an HDR image lights best)"
+
+
+def world_poll(cls, context):
+    """There is an active scene and it has a world (Compute from World, Extract Lights)."""
+    if not scene_poll(cls, context):
+        return False
+    if context.scene.world is None:
+        cls.poll_message_set(NO_WORLD)
+        return False
+    return True
+
+
 def coefficients_poll(cls, context, message=NO_COEFFICIENTS):
     """There is an active scene and it has SH coefficients (else ``message``)."""
     if not scene_poll(cls, context):

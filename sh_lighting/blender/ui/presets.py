@@ -18,9 +18,10 @@ follows Blender's conventions without executing anything:
   coefficients as a user preset under a sanitised file name (``preset_io.preset_file_name``),
   refusing to replace one unless Overwrite is ticked; "+" without a name opens a dialog whose
   name field is ready for typing.
-* Import and Export use the file browser: Import (opening in the .blend file's folder) reads our
-  JSON; Export has one entry per format (``preset_io.FORMATS``), each with its own label on the
-  file browser's button, and writes atomically, refusing to replace an existing file unless
+* Import and Export use the file browser, opening in the .blend file's folder: Import reads our
+  JSON; Export is one operator with a Format choice (``preset_io.FORMATS``; the Export menu
+  has an entry per format, each the same operator with its format set), each format with its
+  own default file name, and writes atomically, refusing to replace an existing file unless
   Overwrite is ticked (the browser also flags existing files in red).
 
 Operators that change the scene (load, import) are undoable; those that only touch files
@@ -48,25 +49,20 @@ REMOVE = "shlight.preset_remove"
 IMPORT = "shlight.import_preset"
 EXPORT = "shlight.export_preset"
 
-FORMAT_DESCRIPTIONS = {
-    "sh_lighting": "SH Lighting preset: raw L_lm in Blender axes, with metadata (Import reads it)",
-    "threejs": "A LightProbe for three.js (ObjectLoader JSON): radiance L_lm, y-up glTF axes",
-    "gltf": "A .gltf environment for Babylon.js: irradiance coefficients and a specular cube "
-            "prefiltered from the world image, y-up glTF axes",
-    "filament": "cmgen-style sh.txt for Filament: shader-ready pre-scaled irradiance",
-}
-# The file browser's button of each format's Export operator.
-EXPORT_LABELS = {
-    "sh_lighting": "Export SH Preset",
-    "threejs": "Export three.js LightProbe",
-    "gltf": "Export glTF Environment",
-    "filament": "Export Filament SH",
-}
 FORMAT_ITEMS = tuple(
-    (key.upper(), label, FORMAT_DESCRIPTIONS.get(key, label))
-    for key, (label, _ext) in preset_io.FORMATS.items()
+    (key.upper(), fmt.label, fmt.description) for key, fmt in preset_io.FORMATS.items()
 )
-KNOWN_EXTENSIONS = {ext for _label, ext in preset_io.FORMATS.values()}
+KNOWN_EXTENSIONS = {fmt.extension for fmt in preset_io.FORMATS.values()}
+UNTITLED = "untitled"
+
+
+def default_file_name(blend_path, key):
+    """The file name Export proposes for format ``key``: the .blend's name (else "untitled")
+    and the format's own ending and extension ("shot_threejs_lightprobe.json"), never the
+    name another format proposes."""
+    stem = Path(blend_path).stem if blend_path else UNTITLED
+    fmt = preset_io.FORMATS[key]
+    return stem + fmt.default_suffix + fmt.extension
 
 
 def _coefficients_poll(cls, context):
@@ -163,10 +159,11 @@ FILAMENT_FRAME_ITEMS = tuple(
 )
 
 
-class _Export(ExportHelper):
-    """Export's settings and behaviour, shared by the general operator (with a Format choice)
-    and the one per format of the Export menu."""
+class SHLIGHT_OT_export_preset(bpy.types.Operator, ExportHelper):
+    """Write the scene's SH lighting as a preset, or for three.js, glTF or Filament"""
 
+    bl_idname = EXPORT
+    bl_label = "Export"  # the file browser's button: short enough never to be cut
     bl_options = {"REGISTER"}
 
     filename_ext = ".json"
@@ -193,16 +190,39 @@ class _Export(ExportHelper):
     def poll(cls, context):
         return _coefficients_poll(cls, context)
 
+    @classmethod
+    def description(cls, _context, props):
+        """The chosen format's description (the Export menu has an entry per format)."""
+        return preset_io.FORMATS[props.export_format.lower()].description
+
+    def invoke(self, context, _event):
+        """The file browser in the .blend's folder, on the format's own default name."""
+        if not self.filepath:
+            folder = os.path.dirname(bpy.data.filepath) if bpy.data.filepath else ""
+            self.filepath = os.path.join(
+                folder, default_file_name(bpy.data.filepath, self.export_format.lower()))
+        context.window_manager.fileselect_add(self)
+        return {"RUNNING_MODAL"}
+
     def check(self, _context):
-        """Give the file name the extension of the chosen format (.json, .gltf or .txt)."""
-        wanted = preset_io.FORMATS[self.export_format.lower()][1]
+        """Follow the chosen format: a default name becomes that format's default name, any
+        other name gets the format's extension (.json, .gltf or .txt)."""
         path = self.filepath
-        if not os.path.basename(path):
+        name = os.path.basename(path)
+        if not name:
             return False
-        stem, ext = os.path.splitext(path)
-        if ext.lower() == wanted:
+        key = self.export_format.lower()
+        defaults = {default_file_name(bpy.data.filepath, k) for k in preset_io.FORMATS}
+        if name in defaults:
+            wanted = os.path.join(os.path.dirname(path), default_file_name(bpy.data.filepath, key))
+        else:
+            stem, ext = os.path.splitext(path)
+            extension = preset_io.FORMATS[key].extension
+            wanted = path if ext.lower() == extension else (
+                (stem if ext.lower() in KNOWN_EXTENSIONS else path) + extension)
+        if wanted == path:
             return False
-        self.filepath = (stem if ext.lower() in KNOWN_EXTENSIONS else path) + wanted
+        self.filepath = wanted
         return True
 
     def draw(self, _context):
@@ -223,16 +243,9 @@ class _Export(ExportHelper):
         except (LookupError, OSError, ValueError) as error:  # PresetError is a ValueError
             self.report({"ERROR"}, f"Nothing exported: {error}")
             return {"CANCELLED"}
-        label = preset_io.FORMATS[self.export_format.lower()][0]
+        label = preset_io.FORMATS[self.export_format.lower()].label
         self.report({"INFO"}, f"Exported {label} to {path}")
         return {"FINISHED"}
-
-
-class SHLIGHT_OT_export_preset(_Export, bpy.types.Operator):
-    """Write the scene's SH lighting as a preset, or for three.js, glTF or Filament"""
-
-    bl_idname = EXPORT
-    bl_label = "Export SH Lighting"
 
 
 class SHLIGHT_OT_preset_add(bpy.types.Operator):
@@ -310,43 +323,15 @@ class SHLIGHT_OT_preset_remove(bpy.types.Operator):
         return {"FINISHED"}
 
 
-def _draw_one_format(self, _context):
-    """The file browser's side panel of a one-format Export: its options, no Format choice."""
-    layout = self.layout
-    layout.use_property_split = True
-    layout.use_property_decorate = False
-    if self.export_format == "FILAMENT":
-        layout.prop(self, "filament_frame")
-    layout.prop(self, "overwrite")
-
-
-def _export_operator(key):
-    """An Export operator for format ``key`` of ``preset_io.FORMATS``: the general one with
-    that format fixed, and a label of its own on the file browser's button."""
-    label, extension = preset_io.FORMATS[key]
-    return type(f"SHLIGHT_OT_export_{key}", (_Export, bpy.types.Operator), {
-        "__doc__": FORMAT_DESCRIPTIONS.get(key, label),
-        "bl_idname": f"shlight.export_{key}",
-        "bl_label": EXPORT_LABELS.get(key, f"Export {label}"),
-        "filename_ext": extension,
-        "__annotations__": {"export_format": EnumProperty(
-            name="Format", items=FORMAT_ITEMS, default=key.upper(), options={"HIDDEN"})},
-        "draw": _draw_one_format,
-    })
-
-
-EXPORTERS = tuple(_export_operator(key) for key in preset_io.FORMATS)
-
-
 class SHLIGHT_MT_export(bpy.types.Menu):
     """Export the scene's SH coefficients"""
 
     bl_label = "Export"
 
     def draw(self, _context):
-        for key, cls in zip(preset_io.FORMATS, EXPORTERS, strict=True):
-            label, extension = preset_io.FORMATS[key]
-            self.layout.operator(cls.bl_idname, text=f"{label} ({extension})")
+        for key, fmt in preset_io.FORMATS.items():  # one operator, its format chosen here
+            op = self.layout.operator(EXPORT, text=f"{fmt.label} ({fmt.extension})")
+            op.export_format = key.upper()
 
 
 def draw_preset_menu(layout):
@@ -411,7 +396,6 @@ classes = (
     SHLIGHT_OT_export_preset,
     SHLIGHT_OT_preset_add,
     SHLIGHT_OT_preset_remove,
-    *EXPORTERS,
     SHLIGHT_MT_export,
     SHLIGHT_PT_presets,
 )
