@@ -1,6 +1,7 @@
 """Transfer (issue 22): bake error against bake samples, bake seconds per 10k vertices, and
 Cycles at equal error (transfer at 1 sample against path tracing). Prints a Markdown section
-for benchmarks/REPORT.md. Run: ``python -m benchmarks.bench_transfer [--eevee]``.
+for benchmarks/REPORT.md. Run: ``python -m benchmarks.bench_transfer [--eevee]``, or ``--equal-error`` for the
+160 px equal-error comparison alone.
 
 Scene (tests/transfer_scenes.py): a 4 m ground in 24 × 24 quads and a 1 m box (6 × 6 quads a
 face) on it, grey diffuse 0.8, under a world emitting exactly Σ L_lm Y_lm (grey LIGHTING),
@@ -144,5 +145,29 @@ def main(eevee=False):
     print("\n".join(lines))
 
 
+def equal_error(size=160, ground_cuts=64, box_cuts=8):
+    """Transfer at 1 spp against path tracing at a few sample counts, at a size where a
+    render is not all overhead and with a mesh dense enough for ~1 % interpolation error."""
+    scene, ground, box = scene_for(ground_cuts, box_cuts, size)
+    reference, alpha, ref_seconds = timed_render(scene, "equal_reference", 2048)
+    mask = np.repeat((alpha > 0.999)[..., None], 3, axis=-1)
+    rows = []
+    for spp in (16, 32, 64, 128, 256):
+        rgb, _, seconds = timed_render(scene, f"equal{spp}", spp)
+        rows.append((f"path tracing | {spp}", ts.relative_rmse(rgb, reference, mask), seconds))
+    info = bake.bake_transfer(scene, [ground, box], samples=64)
+    ts.use_material([ground, box], ts.transfer_material())
+    rgb, _, seconds = timed_render(scene, "equal_transfer", 1)
+    rows.append(("transfer (bake 64 samples) | 1", ts.relative_rmse(rgb, reference, mask), seconds))
+    lines = [f"{size} × {size} px, ground {ground_cuts} × {ground_cuts} quads, {info.vertices} "
+             f"vertices, bake {info.seconds:.1f} s, reference 2048 spp {ref_seconds:.1f} s, "
+             f"load {load()}:", "", "| method | spp | error | render s |", "|---|---|---|---|"]
+    lines += [f"| {name} | {100 * error:.2f} % | {seconds:.2f} |" for name, error, seconds in rows]
+    print("\n".join(lines))
+
+
 if __name__ == "__main__":
-    main(eevee="--eevee" in sys.argv)
+    if "--equal-error" in sys.argv:
+        equal_error()
+    else:
+        main(eevee="--eevee" in sys.argv)
