@@ -130,3 +130,34 @@ def test_a_library_light_is_never_changed(sunny, tmp_path):
     assert len(info.created) == 1 and linked.data.energy == 10.0
     api.compute_from_world(scene)
     assert [o for o in scene.objects if o.type == "LIGHT"] == [linked]
+
+
+def test_a_linked_duplicate_keeps_its_light_data(sunny):
+    """Alt+D shares the light data: updating ours must not change the artist's copy."""
+    scene = sunny
+    [name] = api.extract_lights(scene, count=1).lights
+    ours = scene.objects[name]
+    linked = ours.copy()  # the object copied, its light data shared
+    scene.collection.objects.link(linked)
+    linked.data.energy = 2.0
+    shared = linked.data
+    again = api.extract_lights(scene, count=1)
+    assert again.lights == [name] and ours.data != shared and linked.data == shared
+    assert shared.energy == 2.0 and ours.data.energy != 2.0
+    api.compute_from_world(scene)
+    assert [o.name for o in scene.objects if o.type == "LIGHT"] == [linked.name]
+    assert linked.data.energy == 2.0
+
+
+@pytest.mark.parametrize("garbage", ["abc", {"lights": [1, 2], "collection": 3}],
+                         ids=["text", "not objects"])
+def test_a_broken_registry_touches_nothing(sunny, garbage):
+    scene = sunny
+    artist = bpy.data.objects.new("Lamp", bpy.data.lights.new("Lamp", type="POINT"))
+    scene.collection.objects.link(artist)
+    scene[lights.REGISTRY] = garbage
+    assert lights.extracted_lights(scene) == []
+    info = api.extract_lights(scene, count=1)
+    assert len(info.created) == 1 and artist.name in scene.objects
+    api.compute_from_world(scene)
+    assert [o.name for o in scene.objects if o.type == "LIGHT"] == ["Lamp"]

@@ -104,7 +104,7 @@ def _registry(scene):
 
 def _ours(scene, obj):
     """Whether ``obj`` is a light of ``scene`` the add-on may change: in the scene, local."""
-    return (obj is not None and obj.type == "LIGHT" and obj.library is None
+    return (isinstance(obj, bpy.types.Object) and obj.type == "LIGHT" and obj.library is None
             and scene.objects.get(obj.name) == obj)
 
 
@@ -137,7 +137,7 @@ def _collection(scene):
     """The collection of the extracted lights if it is still the add-on's and in the scene."""
     registry = _registry(scene)
     found = registry.get("collection") if registry is not None else None
-    if found is None or found.library is not None:
+    if not isinstance(found, bpy.types.Collection) or found.library is not None:
         return None
     return found if found in scene.collection.children_recursive else None
 
@@ -240,6 +240,8 @@ def extract_lights(scene, count=3, error_target=None, size_limit=SIZE_LIMIT):
         direction = to_world_direction(light.direction, source.rotation)
         if existing:
             obj = existing.pop(0)
+            if obj.data.users > 1:  # shared with an artist's linked duplicate (Alt+D): not ours
+                obj.data = obj.data.copy()
             obj.data.type = "SUN"
         else:
             obj = _new_light(scene, collection, index, direction)
