@@ -8,7 +8,7 @@ from pathlib import Path
 from ..formats.atomic import leftovers
 from .options import add_nonfinite, positive, whole_range
 from .paths import file_in_way, kind, remove_own_leftovers
-from .report import CommandError, error_line, say
+from .report import CommandError, error_line, say, time_left
 
 HELP = "one preset per HDRI of a folder; resumable"
 DEFAULT_PATTERNS = "*.exr,*.hdr"
@@ -73,14 +73,16 @@ def run(args):
         except (CommandError, OSError, ValueError) as error:
             counts["failed"] += 1
             failed.append(path.name)
-            say(f"{prefix}: FAILED ({time.perf_counter() - t0:.2f} s)")
+            say(f"{prefix}: FAILED ({time.perf_counter() - t0:.2f} s"
+                f"{time_left(index - first + 1, last - first + 1, time.perf_counter() - start)})")
             error_line(f"{path.name}: {error}")
             continue
         counts[outcome] += 1
         if outcome == "skipped":
             say(f"{prefix}: skipped ({out.name} exists; --force to redo)")
         else:
-            say(f"{prefix}: ok ({time.perf_counter() - t0:.2f} s)")
+            say(f"{prefix}: ok ({time.perf_counter() - t0:.2f} s"
+                f"{time_left(index - first + 1, last - first + 1, time.perf_counter() - start)})")
     say(f"{last - first + 1} file(s): {counts['ok']} ok, {counts['skipped']} skipped, "
         f"{counts['failed']} failed in {time.perf_counter() - start:.2f} s")
     if failed:

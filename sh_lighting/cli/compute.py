@@ -8,7 +8,7 @@ from pathlib import Path
 from ..choices import FILAMENT_FRAMES, FORMATS
 from .options import add_nonfinite, add_scene, positive
 from .paths import blend_relative, check_new_file, input_file, refuse_inputs, remove_own_leftovers
-from .report import CommandError, say
+from .report import CommandError, say, stage_line, timed_stage
 from .session import open_blend, open_file, pick_scene
 
 HELP = "coefficients of an HDRI or of a .blend's world; print them, write a preset"
@@ -75,7 +75,8 @@ def run(args):
         environment = (hdri.pixels, 1.0, None)
         say(f"HDRI {source}")
     if args.lights is not None:
-        coeffs, count = _lights(source, scene, hdri, args.lights)
+        with timed_stage("Extract Lights"):
+            coeffs, count = _lights(source, scene, hdri, args.lights)
         metadata["notes"] = (metadata.get("notes", "") + f" {count} light(s) extracted: these "
                              "coefficients hold the rest of the world.").strip()
         metadata.pop("error_estimate", None)  # it was the whole world's
@@ -91,10 +92,12 @@ def run(args):
     if out is not None:
         remove_own_leftovers(out)
         try:
-            path = preset_io.export_coefficients(
-                coeffs, out, args.format, args.overwrite, metadata, environment,
-                args.filament_frame,
-            )
+            with timed_stage("writing (with the specular cube)" if args.format == "gltf"
+                             else "writing"):
+                path = preset_io.export_coefficients(
+                    coeffs, out, args.format, args.overwrite, metadata, environment,
+                    args.filament_frame,
+                )
         except (OSError, ValueError) as error:
             raise CommandError(str(error)) from None
         say(f"Wrote {FORMATS[args.format][0]} {path}")
@@ -107,7 +110,7 @@ def read_hdri_file(path, nonfinite):
     from ..core.equirect import NonFiniteError
 
     try:
-        return read_hdri(path, nonfinite)
+        return read_hdri(path, nonfinite, progress=stage_line)
     except NonFiniteError as error:
         raise CommandError(
             f"{path}: the image has {error.description}: {NONFINITE_ADVICE}"

@@ -19,3 +19,48 @@ def say(*args, **kwargs):
 def error_line(message):
     """``sh_lighting: error: message`` on stderr."""
     print(f"sh_lighting: error: {message}", file=sys.stderr, flush=True)
+
+
+# Work that takes at least this long gets its own line with its time (a stage of compute).
+STAGE_LINE_SECONDS = 1.0
+
+
+def stage_line(name, seconds, threshold=None):
+    """``  name: 1.23 s`` on stdout when the stage took ``threshold`` (default
+    ``STAGE_LINE_SECONDS``) or longer: the progress of a long compute, a line per stage."""
+    if seconds >= (STAGE_LINE_SECONDS if threshold is None else threshold):
+        say(f"  {name}: {seconds:.2f} s")
+
+
+class timed_stage:  # noqa: N801 (used as ``with timed_stage("name"):``)
+    """``with timed_stage("writing"):`` runs the block and then ``stage_line``s its time."""
+
+    def __init__(self, name):
+        self.name = name
+
+    def __enter__(self):
+        import time
+
+        self.start = time.perf_counter()
+        return self
+
+    def __exit__(self, kind, value, traceback):
+        import time
+
+        if kind is None:
+            stage_line(self.name, time.perf_counter() - self.start)
+        return False
+
+
+def time_left(done, total, elapsed):
+    """``"; about 12 s left"`` after ``done`` of ``total`` files in ``elapsed`` seconds (the mean
+    so far times the files left), or "" when nothing is left or it is under a second."""
+    left = total - done
+    if done <= 0 or left <= 0:
+        return ""
+    seconds = elapsed / done * left
+    if seconds < 1.0:
+        return ""
+    if seconds < 120:
+        return f"; about {seconds:.0f} s left"
+    return f"; about {seconds / 60:.0f} min left"

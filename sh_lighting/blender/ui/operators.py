@@ -64,12 +64,25 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
 
     def execute(self, context):
         start = time.perf_counter()
+        # An 8K image takes seconds: the wait cursor shows progress, the status bar says what
+        # is being done until the report replaces it.
+        wm = context.window_manager
+        workspace = getattr(context, "workspace", None)
+        wm.progress_begin(0, 1)
+        wm.progress_update(0)
+        if workspace is not None:
+            workspace.status_text_set("Computing the lighting of the world…")
         try:
             _coeffs, info = compute.compute_and_store(
                 context.scene, error_normals=compute.REPORT_ERROR_NORMALS)
         except ValueError as error:  # WorldError and invalid coefficients
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
+        finally:
+            wm.progress_update(1)
+            wm.progress_end()
+            if workspace is not None:
+                workspace.status_text_set(None)
         self.report({"INFO"}, compute.report(info, time.perf_counter() - start))
         return {"FINISHED"}
 

@@ -11,6 +11,7 @@ and the 9-term irradiance (eq. 12-13) compared with the exact one at ``ERROR_NOR
 import os
 import sys
 import tempfile
+import time
 from contextlib import contextmanager
 from datetime import date
 from pathlib import Path
@@ -58,19 +59,33 @@ def library_output_captured():
             os.close(saved)
 
 
-def read_hdri(path, nonfinite="raise"):
+def read_hdri(path, nonfinite="raise", progress=None):
     """The ``Hdri`` of the equirectangular image file at ``path``.
 
     ``nonfinite``: "raise" refuses NaN/Inf texels (``core.equirect.NonFiniteError``), "zero"
     treats them as black, in the projection and the estimate alike. A ValueError says why a
-    file cannot be read or projected.
+    file cannot be read or projected. ``progress``: called as progress(stage, seconds) after
+    each stage ("decode", "projection", "error estimate").
     """
+    clock = time.perf_counter()
+
+    def done(stage):
+        nonlocal clock
+        now = time.perf_counter()
+        if progress is not None:
+            progress(stage, now - clock)
+        clock = now
+
     with library_output_captured():
         pixels = images.load_image_pixels(path)
     if nonfinite == "zero":
         pixels = zero_nonfinite(pixels)
+    done("decode")
     coeffs = check_coefficients(project_equirect(pixels, nonfinite=nonfinite))
-    return Hdri(Path(path), pixels, coeffs, error_estimate(pixels, coeffs, ERROR_NORMALS))
+    done("projection")
+    estimate = error_estimate(pixels, coeffs, ERROR_NORMALS)
+    done("error estimate")
+    return Hdri(Path(path), pixels, coeffs, estimate)
 
 
 def hdri_metadata(hdri):
