@@ -21,7 +21,7 @@ import numpy as np
 
 from ...core.coefficients import check_coefficients
 from ...core.equirect import zero_nonfinite
-from ...core.irradiance import error_estimate
+from ...core.irradiance import bounded_error_estimate
 from ...core.lights import extract_lights
 from ...core.projection import project_equirect
 from . import images
@@ -40,6 +40,7 @@ class Hdri(NamedTuple):
     pixels: np.ndarray
     coefficients: np.ndarray
     estimate: dict | None
+    reference: str = ""  # what the estimate's exact irradiance was computed from
 
 
 @contextmanager
@@ -83,9 +84,16 @@ def read_hdri(path, nonfinite="raise", progress=None):
     done("decode")
     coeffs = check_coefficients(project_equirect(pixels, nonfinite=nonfinite))
     done("projection")
-    estimate = error_estimate(pixels, coeffs, ERROR_NORMALS)
+    bounded = bounded_error_estimate(pixels, coeffs, ERROR_NORMALS)
     done("error estimate")
-    return Hdri(Path(path), pixels, coeffs, estimate)
+    if bounded is None:
+        return Hdri(Path(path), pixels, coeffs, None)
+    height, width = bounded["reference_size"]
+    reference = "" if (height, width) == pixels.shape[:2] else (
+        f" (of the image box-downsampled to {width}x{height}: within "
+        f"{100 * bounded['bound']:.2g} % of the power of the full-resolution values)")
+    estimate = {"mean": bounded["mean"], "max": bounded["max"]}
+    return Hdri(Path(path), pixels, coeffs, estimate, reference)
 
 
 def hdri_metadata(hdri):
@@ -103,7 +111,8 @@ def hdri_metadata(hdri):
     if hdri.estimate is not None:
         metadata["error_estimate"] = hdri.estimate
         metadata["notes"] += (
-            f" Error estimate at {ERROR_NORMALS} normals against the exact irradiance."
+            f" Error estimate at {ERROR_NORMALS} normals against the exact irradiance"
+            f"{hdri.reference}."
         )
     return metadata
 
