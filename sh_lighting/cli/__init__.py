@@ -76,7 +76,7 @@ picks and saves the .blend, ``options`` holds the shared argument types, ``scrip
 import argparse
 import sys
 
-from . import apply, batch, compute, photo, render, transfer
+from . import apply, batch, compute, interrupts, photo, render, transfer
 from .report import CommandError, error_line
 
 PROG = "python -m sh_lighting"
@@ -111,16 +111,18 @@ def build_parser(prog=PROG):
 
 def main(argv=None, prog=PROG):
     """Run one command; returns the exit status (0 ok, 1 failed, 2 wrong arguments)."""
-    parser = build_parser(prog)
-    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    interrupts.install()
     try:
+        parser = build_parser(prog)
+        args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+        interrupts.import_bpy()
         return args.run(args)
     except CommandError as error:
         error_line(error)
         return 1
     except KeyboardInterrupt:
         print("sh_lighting: interrupted", file=sys.stderr, flush=True)
-        return 130
+        return interrupts.exit_status()
 
 
 def run_blender_command(argv):

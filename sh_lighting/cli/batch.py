@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 
 from ..formats.atomic import leftovers
+from . import interrupts
 from .options import add_nonfinite, positive, whole_range
 from .paths import file_in_way, kind, remove_own_leftovers
 from .report import CommandError, error_line, say, time_left
@@ -169,5 +170,6 @@ def batch_one(path, out, args, inputs):
     if out.exists() and not args.force:
         return "skipped"
     hdri = read_hdri_file(path, args.nonfinite)
+    interrupts.check()
     preset_io.export_coefficients(hdri.coefficients, out, "sh_lighting", True, hdri_metadata(hdri))
     return "ok"

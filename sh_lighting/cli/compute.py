@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 
 from ..choices import FILAMENT_FRAMES, FORMATS
+from . import interrupts
 from .options import add_nonfinite, add_scene, positive
 from .paths import blend_relative, check_new_file, input_file, refuse_inputs, remove_own_leftovers
 from .report import CommandError, say, stage_line, timed_stage
@@ -91,6 +92,7 @@ def run(args):
     say(f"Computed in {elapsed:.2f} s")
     if out is not None:
         remove_own_leftovers(out)
+        interrupts.check()
         try:
             with timed_stage("writing (with the specular cube)" if args.format == "gltf"
                              else "writing"):

@@ -4,6 +4,7 @@ import time
 from pathlib import Path
 
 from ..formats.atomic import atomic_destination
+from . import interrupts
 from .options import FrameRange, add_scene, positive
 from .paths import file_in_way, refuse_inputs, remove_own_leftovers
 from .report import CommandError, say
@@ -139,6 +140,7 @@ def render_frame(scene, output, frame, target, blend):
             scene.render.filepath = str(temporary)
             try:
                 bpy.ops.render.render(write_still=True, scene=scene.name)
+                interrupts.check()
             finally:
                 scene.render.filepath = output
     except (OSError, RuntimeError) as error:

@@ -3,6 +3,7 @@
 from pathlib import Path
 
 from ..formats.atomic import atomic_destination
+from . import interrupts
 from .paths import input_file, remove_own_leftovers
 from .report import CommandError
 
@@ -60,4 +61,5 @@ def save_blend(path, overwrite):
     with atomic_destination(path, overwrite, suffix=".blend", what=".blend file",
                             hint="pass --overwrite") as temporary:
         bpy.ops.wm.save_as_mainfile(filepath=str(temporary), copy=True)
+        interrupts.check()  # a Ctrl+C taken while Blender saved: the input stays as it was
     return Path(path)
