@@ -2,7 +2,7 @@
 group applied to its materials, saved to a new file or in place."""
 
 from .options import add_mode, add_scene
-from .paths import blend_relative, check_new_file, input_file, refuse_inputs
+from .paths import blend_relative, changed_alone, check_new_file, input_file, refuse_inputs
 from .report import CommandError, say
 from .session import open_blend, open_file, pick_scene, save_blend
 
@@ -35,11 +35,6 @@ def add_arguments(p, prog):
 
 
 def run(args):
-    from .. import api
-    from ..blender import scene_data
-    from ..blender.presets import files as preset_io
-    from ..blender.shading import materials
-
     if args.blend is not None:
         blend = input_file(args.blend, ".blend file", "give the .blend file to change")
     else:
@@ -51,7 +46,20 @@ def run(args):
                       advice="use --in-place to replace it")
         refuse_inputs(out, "--out", {"preset": preset})
         check_new_file(out, args.overwrite, what="--out")
-    blend = open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
+    if args.in_place:
+        with changed_alone(blend, ".blend file"):
+            return apply_and_save(args, preset, coeffs, out)
+    return apply_and_save(args, preset, coeffs, out)
+
+
+def apply_and_save(args, preset, coeffs, out):
+    """Open the .blend, set the preset, apply the group, save to ``out``."""
+    from .. import api
+    from ..blender import scene_data
+    from ..blender.presets import files as preset_io
+    from ..blender.shading import materials
+
+    open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
     scene = pick_scene(args.scene)
     objects = objects_to_apply(scene, args.objects)
     provenance = preset_io.preset_provenance(preset, {})

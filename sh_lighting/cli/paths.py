@@ -3,6 +3,7 @@ outputs that are never an input, destinations checked before any work, leftovers
 run. Every failure is a ``CommandError`` of one line."""
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..formats.atomic import check_destination, real_destination, remove_leftovers
@@ -88,3 +89,25 @@ def remove_own_leftovers(path):
     real = real_destination(path)
     for leftover in remove_leftovers(real.parent, real.name):
         say(f"removed {leftover.name}, left in {leftover.parent} by an interrupted run")
+
+
+@contextmanager
+def changed_alone(path, what):
+    """Hold an exclusive lock (``flock``) on the file ``path`` during the block, or refuse in
+    one line when another run holds it: two ``apply --in-place`` on one file never
+    interleave (the lock goes with the open file, so Blender reading and writing the path
+    does not release it; the file replaced at the end is a new one, free for the next run)."""
+    import fcntl
+
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise CommandError(
+                f"{what} '{path}' is being changed by another sh_lighting run: wait for it "
+                "to end, then run again"
+            ) from None
+        yield
+    finally:
+        os.close(fd)

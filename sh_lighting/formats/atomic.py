@@ -23,8 +23,12 @@ check and the move is replaced (no portable way to refuse it exists).
 
 What a kill leaves: a process killed (SIGKILL, power loss) between creating the temporary
 file and the move leaves that hidden temporary file beside the destination, and the
-destination as it was. ``leftovers`` finds them by their name and ``remove_leftovers``
-deletes them; the command line does so at its next run for the files it writes.
+destination as it was. The temporary name holds the writer's pid
+(``.<name>.<pid>-<12 hex digits><suffix>``); ``leftovers`` finds those whose writer is
+provably gone (no process with that pid on this machine; an earlier version's name without a
+pid once it is ``OLD_LEFTOVER_AGE`` old) and ``remove_leftovers`` deletes them; the command
+line does so at its next run for the files it writes. A file another run is still writing
+(Blender's in-flight ``.blend@`` included) is never taken.
 """
 
 import errno
@@ -36,7 +40,10 @@ from contextlib import contextmanager
 from pathlib import Path
 
 _TOKEN_DIGITS = 12  # secrets.token_hex(6)
-_LEFTOVER = re.compile(rf"^\.(?P<name>.+)\.[0-9a-f]{{{_TOKEN_DIGITS}}}(?P<suffix>\.[^.]+)$")
+_LEFTOVER = re.compile(
+    rf"^\.(?P<name>.+)\.(?:(?P<pid>\d+)-)?[0-9a-f]{{{_TOKEN_DIGITS}}}(?P<suffix>\.[^.]+)$"
+)
+OLD_LEFTOVER_AGE = 2 * 3600.0  # s: a temporary name without a pid (an earlier version's)
 
 
 def _exists_error(path, what, hint):
@@ -72,12 +79,35 @@ def check_destination(path, overwrite, what, hint):
 def temporary_path(path, suffix=".tmp"):
     """A fresh hidden path next to ``path`` (same folder, so ``os.replace`` is atomic)."""
     path = Path(path)
-    return path.parent / f".{path.name}.{secrets.token_hex(_TOKEN_DIGITS // 2)}{suffix}"
+    token = secrets.token_hex(_TOKEN_DIGITS // 2)
+    return path.parent / f".{path.name}.{os.getpid()}-{token}{suffix}"
 
 
-def leftovers(folder, name=None):
-    """The temporary files of interrupted writes in ``folder`` (sorted), all of them or
-    only those of the destination file ``name``."""
+def _writer_gone(pid, entry, now):
+    """Whether the run that made the temporary file ``entry`` has provably ended."""
+    if pid is None:  # an earlier version's name: only an old one is surely abandoned
+        try:
+            return now - entry.stat(follow_symlinks=False).st_mtime > OLD_LEFTOVER_AGE
+        except OSError:
+            return False
+    pid = int(pid)
+    if pid <= 0 or pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except (OSError, OverflowError):  # PermissionError: another user's process runs
+        return False
+    return False
+
+
+def leftovers(folder, name=None, now=None):
+    """The temporary files of interrupted writes in ``folder`` (sorted) whose writer is
+    gone, all of them or only those of the destination file ``name``."""
+    import time
+
+    now = time.time() if now is None else now
     folder = Path(folder)
     try:
         entries = list(os.scandir(folder))
@@ -86,18 +116,18 @@ def leftovers(folder, name=None):
     found = []
     for entry in entries:
         match = _LEFTOVER.match(entry.name)
-        if match and (name is None or match["name"] == name) and entry.is_file(
-            follow_symlinks=False
-        ):
+        if (match and (name is None or match["name"] == name)
+                and entry.is_file(follow_symlinks=False)
+                and _writer_gone(match["pid"], entry, now)):
             found.append(folder / entry.name)
     return sorted(found)
 
 
-def remove_leftovers(folder, name=None):
+def remove_leftovers(folder, name=None, now=None):
     """Delete ``leftovers(folder, name)``; returns the paths removed (a file that cannot be
     removed is left and not listed)."""
     removed = []
-    for path in leftovers(folder, name):
+    for path in leftovers(folder, name, now):
         try:
             os.unlink(path)
         except OSError:

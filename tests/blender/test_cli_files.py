@@ -36,6 +36,16 @@ def one_error_line(result):
     return lines[0]
 
 
+def dead_pid():
+    """The pid of a process that has ended (what a killed run's temporary name holds)."""
+    import subprocess
+    import sys
+
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                              capture_output=True, text=True, check=True)
+    return int(finished.stdout)
+
+
 def copy(source, destination):
     destination.write_bytes(Path(source).read_bytes())
     return destination
@@ -176,20 +186,20 @@ def test_batch_removes_and_reports_what_a_killed_run_left(tmp_path):
     hdris.mkdir()
     out.mkdir()
     write_exr(hdris / "a.exr", constant_pixels((1.0, 1.0, 1.0)))
-    left = out / ".a.json.0123456789ab.tmp"
+    left = out / f".a.json.{dead_pid()}-0123456789ab.tmp"
     left.write_text('{"format": "sh_lig')
     user = out / ".notes.tmp"
     user.write_text("the user's own")
     result = run("batch", hdris, out)
     assert result.returncode == 0, result.stderr
     assert (f"removed 1 temporary file(s) left in {out} by an interrupted run: "
-            ".a.json.0123456789ab.tmp") in result.stdout
+            f"{left.name}") in result.stdout
     assert sorted(p.name for p in out.iterdir()) == [".notes.tmp", "a.json"]
 
 
 def test_apply_removes_what_a_killed_save_left(inputs, tmp_path):
     out = tmp_path / "new.blend"
-    left = tmp_path / ".new.blend.00ff00ff00ff.blend"
+    left = tmp_path / f".new.blend.{dead_pid()}-00ff00ff00ff.blend"
     left.write_bytes(b"BLENDER half")
     result = run("apply", inputs["preset"], inputs["blend"], "--out", out)
     assert result.returncode == 0, result.stderr

@@ -110,26 +110,46 @@ def test_a_file_in_the_way_of_the_folder_is_named(tmp_path):
 # --- what a kill leaves, found at the next run -------------------------------------------
 
 
+def _dead_pid():
+    import subprocess
+    import sys
+
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                              capture_output=True, text=True, check=True)
+    return int(finished.stdout)
+
+
 def test_leftovers_of_killed_writes_are_found_by_name_and_removed(tmp_path):
-    keep = ["p.json", ".hidden", ".p.json.tmp", ".p.json.0123456789ax.tmp", "notes.txt"]
+    dead = _dead_pid()
+    keep = ["p.json", ".hidden", ".p.json.tmp", ".p.json.0123456789ax.tmp", "notes.txt",
+            f".p.json.{os.getpid()}-0123456789ab.tmp",  # this process is writing it
+            ".p.json.1-0123456789ab.tmp",  # process 1 runs
+            ".r.json.00ff00ff00ff.tmp"]  # an earlier version's name, a minute old
     for name in keep:
         (tmp_path / name).write_text("user data")
-    ours = [".p.json.0123456789ab.tmp", ".q.json.a1b2c3d4e5f6.tmp", ".s.blend.00ff00ff00ff.blend"]
+    ours = [f".p.json.{dead}-0123456789ab.tmp", f".q.json.{dead}-a1b2c3d4e5f6.tmp",
+            f".s.blend.{dead}-00ff00ff00ff.blend@", ".t.json.0123456789ab.tmp"]
     for name in ours:
         (tmp_path / name).write_text("half written")
-    (tmp_path / ".d.json.abcdefabcdef.tmp").mkdir()  # a folder is never ours to delete
-    assert [p.name for p in atomic.leftovers(tmp_path)] == sorted(ours)
-    assert [p.name for p in atomic.leftovers(tmp_path, "s.blend")] == [ours[2]]
-    assert [p.name for p in atomic.remove_leftovers(tmp_path, "p.json")] == [ours[0]]
-    assert sorted(p.name for p in atomic.remove_leftovers(tmp_path)) == sorted(ours[1:])
+    now = (tmp_path / ours[3]).stat().st_mtime + atomic.OLD_LEFTOVER_AGE + 1
+    os.utime(tmp_path / ".r.json.00ff00ff00ff.tmp", (now - 60, now - 60))
+    (tmp_path / f".d.json.{dead}-abcdefabcdef.tmp").mkdir()  # a folder is never ours to delete
+    assert [p.name for p in atomic.leftovers(tmp_path, now=now)] == sorted(ours)
+    assert [p.name for p in atomic.leftovers(tmp_path, "s.blend", now=now)] == [ours[2]]
+    assert [p.name for p in atomic.remove_leftovers(tmp_path, "p.json", now=now)] == [ours[0]]
+    assert sorted(p.name for p in atomic.remove_leftovers(tmp_path, now=now)) == sorted(ours[1:])
     left = sorted(p.name for p in tmp_path.iterdir())
-    assert left == sorted(keep + [".d.json.abcdefabcdef.tmp"])
+    assert left == sorted(keep + [f".d.json.{dead}-abcdefabcdef.tmp"])
 
 
-def test_a_temporary_name_is_what_leftovers_looks_for(tmp_path):
+def test_a_temporary_name_is_what_leftovers_looks_for_once_its_writer_is_gone(tmp_path):
     temporary = atomic.temporary_path(tmp_path / "frame_0001.exr", ".exr")
     temporary.write_bytes(b"x")
-    assert atomic.leftovers(tmp_path, "frame_0001.exr") == [temporary]
+    assert temporary.name.startswith(f".frame_0001.exr.{os.getpid()}-")
+    assert atomic.leftovers(tmp_path, "frame_0001.exr") == []  # its writer (us) runs
+    killed = temporary.with_name(temporary.name.replace(f".{os.getpid()}-", f".{_dead_pid()}-"))
+    temporary.rename(killed)
+    assert atomic.leftovers(tmp_path, "frame_0001.exr") == [killed]
 
 
 # --- reading presets: small regular files only, one PresetError each ----------------------
