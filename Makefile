@@ -54,6 +54,7 @@ bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_tables
 	$(PY) -m benchmarks.report
 	$(PY) -m benchmarks.bench_sizes
+	$(PY) -m benchmarks.bench_photo
 
 package: $(STAMP)
 	$(PY) -m tools.package dist
