@@ -25,7 +25,8 @@ import numpy as np
 
 from .equirect import texel_solid_angles
 
-CACHE_VALUES = 1 << 16  # input values handled at a time (256 KB of float32)
+CACHE_VALUES = 1 << 20  # input values handled at a time (4 MB of float32; 64K: 2x slower at 8K,
+#                          from numpy call overhead)
 
 
 def whole_factor(height, width, target_width):
