@@ -24,7 +24,7 @@ A field edit or keyframe changes a property directly (Blender tags the scene its
 Python script writing ``scene["sh_L10"] = ...`` must call ``scene.update_tag()`` afterwards
 for open viewports to see it (a render always reads the current values).
 
-Animated properties (issue 20 item 2). A value written over a keyframed or driven property
+Animated properties (issue 20 item 2; the policy's checks are in ``animated``). A value written over a keyframed or driven property
 is what Blender shows until the next frame change, when the animation overrides it: the
 write would be undone. So ``store`` looks at every property it writes and follows its
 ``animation`` policy (``ANIMATION_POLICIES``) when one is animated (an F-curve of the
@@ -49,8 +49,15 @@ import bpy
 import numpy as np
 
 from ..core.coefficients import FLOAT32_MAX, check_coefficients, real_number, type_name
-from . import compat
 from ..core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
+from .animated import (  # noqa: F401 (the write policy's names, also used through here)
+    ANIMATION_POLICIES,
+    AnimatedError,
+    animation_of,
+    check_animation,
+    clear_animation,
+    listed,
+)
 
 # Attribute/custom-property names: "L1-1" -> "sh_L1m1" (no '-' inside an attribute name).
 PROPERTY_NAMES = tuple("sh_" + name.replace("-", "m") for name in COEFFICIENT_NAMES)
@@ -66,15 +73,10 @@ SOFT_RANGE = 2.0
 SOFT_FLOOR = 1e-3
 GAIN_SOFT_MIN, GAIN_SOFT_MAX = -2.0, 4.0
 PRECISION = 4
-ANIMATION_POLICIES = ("KEY", "CLEAR", "REFUSE")
 DEFAULT_ANIMATION = "KEY"
 GAIN_POLICIES = ("UNIT", "KEEP")
 
 _last_note = ""
-
-
-class AnimatedError(ValueError):
-    """A property ``store`` would write is animated and the policy forbids writing over it."""
 
 
 def has_coefficients(scene):
@@ -231,86 +233,17 @@ def _check_provenance(provenance):
     return dict(provenance)
 
 
-def _path(name):
-    return f'["{name}"]'
-
-
-def animation_of(scene, name):
-    """How custom property ``name`` of ``scene`` is animated: "driven", "keyframed" or None."""
-    animation = getattr(scene, "animation_data", None)
-    if animation is None:
-        return None
-    path = _path(name)
-    if any(curve.data_path == path for curve in animation.drivers):
-        return "driven"
-    curves = compat.action_fcurves(scene) + compat.nla_fcurves(scene)
-    if any(curve.data_path == path for curve in curves):
-        return "keyframed"
-    return None
-
-
 def animated(scene, names=None):
     """{name: "driven" | "keyframed"} of the coefficient and gain properties (or ``names``)
-    that are animated on ``scene``."""
-    found = {}
-    for name in names if names is not None else PROPERTY_NAMES + GAIN_NAMES:
-        how = animation_of(scene, name)
-        if how is not None:
-            found[name] = how
-    return found
+    that are animated on ``scene`` (``animated.animated``)."""
+    from . import animated as module
+
+    return module.animated(scene, PROPERTY_NAMES + GAIN_NAMES if names is None else names)
 
 
 def gains_animated(scene):
     """True when any gain s_lm of ``scene`` is keyframed or driven."""
     return bool(animated(scene, GAIN_NAMES))
-
-
-def _clear_animation(scene, names):
-    """Remove the F-curves (of the scene's own action) and drivers of ``names``; only those."""
-    animation = scene.animation_data
-    paths = {_path(name) for name in names}
-    for curve in [c for c in animation.drivers if c.data_path in paths]:
-        animation.drivers.remove(curve)
-    for curve in [c for c in compat.action_fcurves(scene) if c.data_path in paths]:
-        compat.remove_fcurve(scene, curve)
-    left = animated(scene, names)
-    if left:  # an NLA strip's action (shared, maybe by other scenes): not ours to edit
-        raise AnimatedError(
-            f"{_listed(left)} animated by an NLA strip: nothing stored; remove the strip "
-            "or mute it, then try again"
-        )
-
-
-def _listed(found):
-    names = sorted(found)
-    return f"{', '.join(names)} {'is' if len(names) == 1 else 'are'}"
-
-
-def _check_animation(scene, names, animation):
-    """The animated ones of ``names`` that ``store`` may write under policy ``animation``
-    ({name: how}), or an AnimatedError saying which property and what to do."""
-    if animation not in ANIMATION_POLICIES:
-        raise ValueError(
-            f"animation must be one of {', '.join(ANIMATION_POLICIES)}, got {animation!r}"
-        )
-    found = animated(scene, names)
-    if not found or animation == "CLEAR":
-        return found
-    if animation == "REFUSE":
-        raise AnimatedError(
-            f"{_listed(found)} animated ({', '.join(sorted(set(found.values())))}), so a "
-            "value written now would be undone at the next frame: nothing stored; key the "
-            "new values at this frame (animation='KEY', --animation key) or remove the "
-            "animation (animation='CLEAR', --animation clear)"
-        )
-    driven = {name: how for name, how in found.items() if how == "driven"}
-    if driven:
-        raise AnimatedError(
-            f"{_listed(driven)} driven by a driver, which overrides any value or key: "
-            "nothing stored; remove the driver (Clear Driver on the field, or "
-            "animation='CLEAR', --animation clear), then try again"
-        )
-    return found
 
 
 def last_note():
@@ -342,10 +275,10 @@ def store(scene, coeffs, provenance, animation=DEFAULT_ANIMATION, gains="UNIT"):
     if gains not in GAIN_POLICIES:
         raise ValueError(f"gains must be one of {', '.join(GAIN_POLICIES)}, got {gains!r}")
     written = PROPERTY_NAMES + (GAIN_NAMES if gains == "UNIT" else ())
-    found = _check_animation(scene, written, animation)
+    found = check_animation(scene, written, animation)
     _last_note = ""
     if found and animation == "CLEAR":
-        _clear_animation(scene, found)
+        clear_animation(scene, found)
         _last_note = f"animation of {', '.join(sorted(found))} removed"
     for name, gain_name, rgb in zip(PROPERTY_NAMES, GAIN_NAMES, c):
         scene[name] = [float(v) for v in rgb]
@@ -354,8 +287,8 @@ def store(scene, coeffs, provenance, animation=DEFAULT_ANIMATION, gains="UNIT"):
     if found and animation == "KEY":
         frame = scene.frame_current
         for name in found:
-            scene.keyframe_insert(_path(name), frame=frame)
-        _last_note = f"keyed at frame {frame} because {_listed(found)} animated"
+            scene.keyframe_insert(f'["{name}"]', frame=frame)
+        _last_note = f"keyed at frame {frame} because {listed(found)} animated"
     if record["source"] == "WORLD" and "edit" not in record:
         scene[COMPUTED_PROPERTY] = [float(v) for v in c.ravel()]
         scene[COMPUTED_PROVENANCE_PROPERTY] = record

@@ -189,3 +189,15 @@ def test_the_design_operators_report_the_key_they_wrote(addon):
     assert result == {"FINISHED"}
     assert reports == [({"INFO"}, "SH lighting keyed at frame 1 because sh_L10 is animated")]
     assert_allclose(rendered(scene, 1)[2], (2.0, 4.0, 6.0))
+
+
+def test_reset_over_a_keyed_gain_keys_it_and_says_so(addon):
+    scene = bpy.context.scene
+    scene_data.store(scene, BASE, {"source": "WORLD"})  # the Reset values
+    api.exposure(scene, 1.0)
+    key(scene, "sh_L11_gain", 3, 0.25)
+    scene.frame_set(3)
+    assert bpy.ops.shlight.reset() == {"FINISHED"}
+    assert scene_data.last_note() == "keyed at frame 3 because sh_L11_gain is animated"
+    for frame in (3, 8):  # one key: the Reset value renders at every frame
+        assert_allclose(rendered(scene, frame), BASE)

@@ -51,6 +51,12 @@ def _target_poll(cls, context):
     return True
 
 
+def with_note(message):
+    """``message`` and, when the write keyed or cleared animated values, what it did."""
+    note = scene_data.last_note()
+    return f"{message}; {note}" if note else message
+
+
 class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
     """Compute the 9 SH lighting coefficients from the scene's world (image or procedural)"""
 
@@ -83,7 +89,7 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
             wm.progress_end()
             if workspace is not None:
                 workspace.status_text_set(None)
-        self.report({"INFO"}, compute.report(info, time.perf_counter() - start))
+        self.report({"INFO"}, with_note(compute.report(info, time.perf_counter() - start)))
         return {"FINISHED"}
 
 
@@ -109,7 +115,7 @@ class SHLIGHT_OT_reset(bpy.types.Operator):
         except (LookupError, TypeError, ValueError) as error:
             self.report({"ERROR"}, f"Cannot reset: {error}")
             return {"CANCELLED"}
-        self.report({"INFO"}, "SH lighting reset to the values computed from the world")
+        self.report({"INFO"}, with_note("SH lighting reset to the values computed from the world"))
         return {"FINISHED"}
 
 
