@@ -39,7 +39,6 @@ give a position-dependent irradiance and so not equal the world's).
 Errors are |E − E_ref| over the normals as a fraction of each channel's power (the paper's
 measure), the worst channel's; a channel without light (P ≤ 0: a map with no blue, a black
 map) has no relative error and is left out, so such maps extract like any other.
-``eevee_style_split`` imitates EEVEE's own world sun extraction, for comparison.
 """
 
 from dataclasses import dataclass
@@ -67,7 +66,6 @@ LARGEST_RADIUS = np.radians(60.0)  # the largest max_radius accepted
 MIN_POWER_FRACTION = 0.01  # and carries at least this share of the map's power
 MEDIAN_SORT_LIMIT = 1 << 20  # maps with more texels find the background's median by a bracket
 ERROR_NORMALS = 512  # normals at which the error target is checked (Fibonacci lattice)
-EEVEE_SUN_THRESHOLD = 10.0  # Blender's default World.sun_threshold
 
 # Why an extraction stopped (``Extraction.stop_kind``)
 COUNT, TARGET, DARK, CONTRAST_LOW, TOO_LARGE, TOO_DIM, NO_GAIN = (
@@ -356,29 +354,3 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
         errors.append(error)
     size = stop[2] if len(stop) > 2 else 0.0
     return Extraction(lights, rest, coeffs, errors, stop[0], stop[1], float(max_radius), size)
-
-
-def eevee_style_split(pixels, threshold=EEVEE_SUN_THRESHOLD):
-    """An imitation of EEVEE's world sun extraction: (sun irradiance (3,), direction, coeffs).
-
-    Each texel is clamped so that its largest channel is at most ``threshold`` (keeping its
-    hue); what is clamped off goes into one sun whose irradiance is Σ (L − L_clamped) dΩ and
-    whose direction is the mean texel direction weighted by |L − L_clamped| dΩ (the Euclidean
-    length of the RGB excess); the clamped map becomes order-1 SH (l ≤ 1, 4 coefficients),
-    which is what EEVEE keeps for world diffuse light. Returns (zeros, None, coeffs) when no
-    texel exceeds the threshold.
-    """
-    a = check_pixels(pixels)
-    height, width, _ = a.shape
-    rgb = a[..., :3].astype(np.float64)
-    peak = np.abs(rgb).max(axis=-1)
-    scale = np.minimum(1.0, threshold / np.maximum(peak, 1e-300))
-    clamped = rgb * scale[..., None]
-    excess = (rgb - clamped) * texel_solid_angles(height, width)[:, None, None]
-    coeffs = project_equirect(clamped, max_order=1)
-    if not excess.any():
-        return np.zeros(3), None, coeffs
-    direction = np.linalg.norm(excess, axis=-1).ravel() @ texel_directions(height, width).reshape(
-        -1, 3
-    )
-    return excess.sum(axis=(0, 1)), direction / np.linalg.norm(direction), coeffs

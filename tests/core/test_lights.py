@@ -8,7 +8,7 @@ from sh_lighting.core.equirect import texel_directions, texel_solid_angles
 from sh_lighting.core.irradiance import irradiance, relative_error, total_power
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.sh import spread_normals
-from sh_lighting.core.lights import eevee_style_split
+from eevee_style import eevee_style_split
 from sh_lighting.core.world_map import equirect_irradiance
 
 HEIGHT, WIDTH = 128, 256

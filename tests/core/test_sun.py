@@ -6,6 +6,7 @@ from math import pi
 
 import numpy as np
 import pytest
+from eevee_style import eevee_style_split
 from quadrature import random_directions
 
 from sh_lighting.core.colour import luminance_weights
@@ -18,7 +19,6 @@ from sh_lighting.core.lights import (
     TOO_DIM,
     TOO_LARGE,
     Light,
-    eevee_style_split,
     extract_lights,
     light_irradiance,
     relative_errors,
