@@ -7,6 +7,8 @@ without the add-on and every value an artist edits is keyframable.
 
 import bpy
 
+from .shading.materials import DEFAULT_MODE, MODE_ITEMS
+
 APPLY_TARGETS = (
     ("SELECTED", "Selected", "Materials of the selected objects"),
     ("ALL", "All", "Materials of every object in the scene"),
@@ -23,6 +25,13 @@ class SHLIGHT_PG_settings(bpy.types.PropertyGroup):
         description="Which materials Apply and Remove change",
         items=APPLY_TARGETS,
         default="SELECTED",
+    )
+    apply_mode: bpy.props.EnumProperty(
+        name="Mode",
+        description="How Apply lights the materials (the line below says what it does in the "
+                    "current render engine)",
+        items=MODE_ITEMS,
+        default=DEFAULT_MODE,
     )
     use_capture_width: bpy.props.BoolProperty(
         name="Capture Width",

@@ -191,8 +191,10 @@ def test_principled_weight_follows_metallic_transmission_and_ior(studio):
     s.sphere.visible_glossy = s.sphere.visible_transmission = False  # no SH seen in itself
     _, image = s.render(1)
     mask = covered(image)
-    # Emission only now (the world reaches no closure): its colour / SH emission of white
-    materials.apply_to_materials([material], s.scene, mode="EMISSION")
+    # against the SH emission of white (a plain white Principled in Emission Only mode)
+    white_material = principled_material("White")
+    s.sphere.data.materials[0] = white_material
+    materials.apply_to_materials([white_material], s.scene, mode="EMISSION")
     _, white = s.render(1)
     ratio = image[mask][:, :3].sum() / white[mask][:, :3].sum()
     expected = 0.75 * 0.8 * (1.0 - 0.04)

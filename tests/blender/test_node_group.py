@@ -293,15 +293,20 @@ def test_apply_and_remove_restore_exactly():
     textured = made["textured"].node_tree
     (node,) = materials.added_nodes(made["textured"])
     assert node.node_tree == nodes.ensure_node_group()
-    assert node.inputs["Albedo"].links[0].from_node.bl_idname == "ShaderNodeTexChecker"
+    scale = node.inputs["Albedo"].links[0].from_node  # colour × weight, the colour linked
+    assert scale.inputs[0].links[0].from_node.bl_idname == "ShaderNodeTexChecker"
     assert node.inputs["Normal"].links[0].from_node.bl_idname == "ShaderNodeBump"
     surface = textured.nodes["Material Output"].inputs["Surface"]
     assert surface.links[0].from_socket == node.outputs["Shader"]
 
     diffuse = made["diffuse"]
     (node,) = materials.added_nodes(diffuse)
-    assert not node.inputs["Albedo"].is_linked and not node.inputs["Normal"].is_linked
-    assert tuple(node.inputs["Albedo"].default_value) == pytest.approx((0.2, 0.4, 0.6, 1.0))
+    assert not node.inputs["Normal"].is_linked
+    scale = node.inputs["Albedo"].links[0].from_node  # colour × weight
+    held = scale.inputs[0].links[0].from_node  # the colour, now on a node feeding the BSDF too
+    assert held.bl_idname == "ShaderNodeRGB"
+    assert tuple(held.outputs[0].default_value) == pytest.approx((0.2, 0.4, 0.6, 1.0))
+    assert diffuse.node_tree.nodes["Diffuse BSDF"].inputs["Color"].links[0].from_node == held
     outputs = [n for n in diffuse.node_tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
     assert all(o.inputs["Surface"].links[0].from_node == node for o in outputs)
     json.loads(node[materials.NODE_MARKER])  # the record is plain JSON in the .blend

@@ -1,130 +1,195 @@
-"""Apply mode "KEEP_BSDF": the material keeps its BSDF, the SH term replaces the world's diffuse.
+"""The SH group's Albedo: the diffuse part of a material's surface, followed, never copied.
 
-The material's Surface becomes Add Shader(original surface, SH group "Shader"), the group's
-Albedo being the BSDF's diffuse weight: for a Diffuse BSDF its Color; for a Principled BSDF
+For "KEEP_BSDF" (the default mode) the material keeps its BSDF and the group's Emission is
+added to it; the world's diffuse light is switched off (``world_diffuse``). The group's Albedo
+is then the surface's diffuse reflectance, summed over its diffuse leaves
+(``diffuse_weight.surface_leaves``), each scaled by its Mix factors:
 
-    Base Color · (1 − Metallic) · (1 − Transmission Weight) · (1 − F0),  F0 = ((η − 1)/(η + 1))²
+    albedo = Σ_leaves Π_path (Fac or 1 − Fac) · colour · w
 
-with η its IOR. That is how Cycles layers the Principled BSDF: metallic and transmission are
-mixed in over the dielectric base, and the dielectric specular layer takes its directional
-albedo off the diffuse below it. F0 (the layer's albedo at normal incidence, smooth) stands in
-for Cycles' tabulated albedo, which also depends on roughness and view angle: measured on a
-white sphere under a white sky (diffuse light = render − render with the world invisible to
-diffuse rays, 512 samples), Cycles' diffuse weight at IOR 1.5 is 0.959-0.965 facing the camera
-(F0 gives 0.960) and falls to 0.88 (roughness 0) / 0.92 (roughness 0.5) at grazing view.
-Coat, sheen and Specular IOR Level are not modelled (their attenuation of the diffuse is
-left out). Linked inputs are followed: the weight is computed by Math nodes at render time.
+with, for a Diffuse BSDF, colour = Color and w = 1; for a Principled BSDF, colour = Base Color
+and
 
-The world's diffuse light must then not reach the BSDF as well. In Cycles the world's ray
-visibility for diffuse rays (``World.cycles_visibility.diffuse``) is switched off: diffuse
-closures neither see the world through bounces nor sample it as a light, while glossy and
-transmission closures still reflect and refract it, and lamps light every closure
-(``hide_world_diffuse``). The original value is kept on the world (``WORLD_MARKER``) and put
-back when no material of the file is applied in this mode any more (``restore_worlds``).
-EEVEE has no such switch: its world lighting is one capture (a sphere probe plus the
-spherical harmonics derived from it) serving diffuse and glossy alike, and it ignores ray
-visibility, so in EEVEE this mode adds the SH term to the world's own diffuse light (counted
-twice); use the "EMISSION" mode for EEVEE renders (or a world without lighting).
+    w = Alpha · (1 − Metallic) · (1 − Transmission Weight) · (1 − F0),  F0 = ((η − 1)/(η + 1))²
+
+with η its IOR. That is how Cycles layers the Principled BSDF: Alpha mixes it with a
+transparent BSDF, metallic and transmission are mixed in over the dielectric base, and the
+dielectric specular layer takes its directional albedo off the diffuse below it. F0 (the
+layer's albedo at normal incidence, smooth) stands in for Cycles' tabulated albedo, which also
+depends on roughness and view angle: measured on a white sphere under a white sky, Cycles'
+diffuse weight at IOR 1.5 is 0.959-0.965 facing the camera (F0 gives 0.960) and falls to 0.88
+(roughness 0) / 0.92 (roughness 0.5) at grazing view. Coat, sheen and Specular IOR Level are
+not modelled. "EMISSION" leaves the F0 factor out (nothing renders a specular layer there).
+
+Every input is followed, never copied: a linked input is linked to the same source socket; an
+unlinked one first gets a Value node (an RGB node for a colour) holding its value, linked into
+it, and that node feeds the SH term as well: the BSDF and the SH term read one socket, so
+editing, keyframing or driving the Base Color, Alpha, Metallic, a Mix factor, ... (now on that
+node; keyframes and drivers already on the input move to it) reaches both at once, with no
+re-Apply. (Drivers copying the values would be read in the same node tree they drive, a
+dependency cycle Blender warns about.) Remove gives each input the held node's value, its
+keyframes and drivers back and deletes it (``release``).
 """
 
-import json
-
-# Custom property of a world whose diffuse visibility this module switched off: JSON
-# {"diffuse": the original value}.
-WORLD_MARKER = "sh_lighting_world_diffuse"
+from .. import compat
+from ..node_links import source_socket
+from .diffuse_weight import DIFFUSE_SHADERS
+from .world_diffuse import WORLD_MARKER  # noqa: F401  (the world's mark; kept importable here)
 
 PRINCIPLED = "ShaderNodeBsdfPrincipled"
 # Principled inputs each taking a fraction (its value) of the diffuse base away (4.2-5.0 names).
 WEIGHT_INPUTS = ("Metallic", "Transmission Weight")
 
 
-def _feed(tree, socket, source):
-    """Drive node input ``socket`` by BSDF input ``source``: its link if linked, else its value."""
-    if source.is_linked and not getattr(source.links[0], "is_muted", False):
-        tree.links.new(source.links[0].from_socket, socket)
-    else:
-        socket.default_value = source.default_value
+class _Builder:
+    """Adds nodes (appended to ``added``) and drivers to ``material``'s tree."""
+
+    def __init__(self, material, added, held):
+        self.material = material
+        self.tree = material.node_tree
+        self.added = added
+        self.held = held
+        self.sources = {}
+
+    def node(self, kind, label, **settings):
+        node = self.tree.nodes.new(kind)
+        node.label = label
+        for key, value in settings.items():
+            setattr(node, key, value)
+        self.added.append(node)
+        return node
+
+    def follow(self, target, source):
+        """Link input ``target`` to what feeds input ``source`` of the user's node: its link's
+        source socket; an unlinked ``source`` first gets a Value (or RGB) node of its value,
+        which then feeds both (its keyframes and drivers move along: ``release``)."""
+        linked = source_socket(source)
+        if linked is None:
+            key = source.as_pointer()
+            linked = self.sources.get(key)
+            if linked is None:
+                linked = self.sources[key] = _hold(self.tree, source, self.held)
+        self.tree.links.new(linked, target)
+
+    def math(self, operation, first=None, second=None):
+        """A Math node; each operand a number, an output socket, or ("follow", input socket)."""
+        node = self.node("ShaderNodeMath", f"SH diffuse weight ({operation.lower()})",
+                         operation=operation)
+        for socket, value in zip(node.inputs, (first, second)):
+            if isinstance(value, (int, float)):
+                socket.default_value = value
+            elif isinstance(value, tuple):
+                self.follow(socket, value[1])
+            elif value is not None:
+                self.tree.links.new(value, socket)
+        return node.outputs[0]
 
 
-def _math(tree, added, operation, first=None, second=None):
-    node = tree.nodes.new("ShaderNodeMath")
-    node.operation = operation
-    node.label = f"SH diffuse weight ({operation.lower()})"
-    added.append(node)
-    for socket, value in ((node.inputs[0], first), (node.inputs[1], second)):
-        if isinstance(value, (int, float)):
-            socket.default_value = value
-        elif value is not None:
-            tree.links.new(value, socket)
-    return node
-
-
-def diffuse_weight(tree, bsdf, added):
-    """An output socket of the Principled ``bsdf``'s diffuse weight (module docstring), built
-    from Math nodes appended to ``added``; None for a BSDF whose weight is 1 (Diffuse BSDF)."""
-    if bsdf.bl_idname != PRINCIPLED:
-        return None
+def _leaf_factors(b, leaf, with_specular):
+    """Output sockets (or numbers) whose product is the leaf's weight, Mix factors included."""
     factors = []
+    for mix, second in leaf.path:
+        fac = mix.inputs[0]
+        factors.append(b.math("MULTIPLY", ("follow", fac), 1.0) if second
+                       else b.math("SUBTRACT", 1.0, ("follow", fac)))
+    bsdf = leaf.node
+    if bsdf.bl_idname != PRINCIPLED:
+        return factors
+    alpha = bsdf.inputs.get("Alpha")
+    if alpha is not None:
+        factors.append(b.math("MULTIPLY", ("follow", alpha), 1.0))
     for name in WEIGHT_INPUTS:
         source = bsdf.inputs.get(name)
-        if source is None:
-            continue
-        node = _math(tree, added, "SUBTRACT", 1.0)
-        _feed(tree, node.inputs[1], source)
-        factors.append(node.outputs[0])
+        if source is not None:
+            factors.append(b.math("SUBTRACT", 1.0, ("follow", source)))
     ior = bsdf.inputs.get("IOR")
-    if ior is not None:
-        below = _math(tree, added, "SUBTRACT", None, 1.0)
-        above = _math(tree, added, "ADD", None, 1.0)
-        _feed(tree, below.inputs[0], ior)
-        _feed(tree, above.inputs[0], ior)
-        ratio = _math(tree, added, "DIVIDE", below.outputs[0], above.outputs[0])
-        f0 = _math(tree, added, "POWER", ratio.outputs[0], 2.0)
-        factors.append(_math(tree, added, "SUBTRACT", 1.0, f0.outputs[0]).outputs[0])
-    weight = factors[0] if factors else None
-    for factor in factors[1:]:
-        weight = _math(tree, added, "MULTIPLY", weight, factor).outputs[0]
-    return weight
+    if with_specular and ior is not None:
+        ratio = b.math("DIVIDE", b.math("SUBTRACT", ("follow", ior), 1.0),
+                       b.math("ADD", ("follow", ior), 1.0))
+        factors.append(b.math("SUBTRACT", 1.0, b.math("POWER", ratio, 2.0)))
+    return factors
 
 
-def weighted_albedo(tree, colour_socket, weight, added):
-    """An output socket of colour × ``weight`` (a Vector Math Scale node, appended to ``added``).
+def albedo(material, leaves, with_specular, added, held):
+    """An output socket of the surface's diffuse albedo (module docstring), built from nodes
+    appended to ``added``; ``with_specular``: include the (1 − F0) factor. The inputs given a
+    Value/RGB node are appended to ``held`` as records for ``release``."""
+    b = _Builder(material, added, held)
+    total = None
+    for leaf in leaves:
+        factors = _leaf_factors(b, leaf, with_specular)
+        weight = factors[0] if factors else 1.0
+        for factor in factors[1:]:
+            weight = b.math("MULTIPLY", weight, factor)
+        scaled = b.node("ShaderNodeVectorMath", "SH diffuse albedo", operation="SCALE")
+        b.follow(scaled.inputs[0], leaf.node.inputs[DIFFUSE_SHADERS[leaf.node.bl_idname]])
+        if isinstance(weight, float):
+            scaled.inputs["Scale"].default_value = weight
+        else:
+            b.tree.links.new(weight, scaled.inputs["Scale"])
+        if total is None:
+            total = scaled.outputs["Vector"]
+        else:
+            add = b.node("ShaderNodeVectorMath", "SH diffuse albedo (sum)", operation="ADD")
+            b.tree.links.new(total, add.inputs[0])
+            b.tree.links.new(scaled.outputs["Vector"], add.inputs[1])
+            total = add.outputs["Vector"]
+    return total
 
-    ``colour_socket``: the output linked to the base colour, or a colour value (4-tuple).
-    """
-    node = tree.nodes.new("ShaderNodeVectorMath")
-    node.operation = "SCALE"
-    node.label = "SH diffuse albedo"
-    added.append(node)
-    if isinstance(colour_socket, tuple):
-        node.inputs[0].default_value = colour_socket[:3]
-    else:
-        tree.links.new(colour_socket, node.inputs[0])
-    tree.links.new(weight, node.inputs["Scale"])
-    return node.outputs["Vector"]
+
+def _escape(name):
+    return name.replace("\\", "\\\\").replace('"', '\\"')
 
 
-def hide_world_diffuse(world):
-    """Switch ``world``'s Cycles diffuse ray visibility off, remembering the original once."""
-    if world is None or world.library is not None:
+def _move_curves(tree, old, new):
+    """Point the keyframes and drivers of ``tree`` animating data path ``old`` at ``new``."""
+    animation = tree.animation_data
+    if animation is None:
         return
-    if WORLD_MARKER not in world:
-        world[WORLD_MARKER] = json.dumps({"diffuse": bool(world.cycles_visibility.diffuse)})
-    world.cycles_visibility.diffuse = False
+    curves = list(animation.drivers)
+    if animation.action is not None:
+        curves += list(compat.action_fcurves(tree))
+    for fcurve in curves:
+        if fcurve.data_path == old:
+            fcurve.data_path = new
 
 
-def restore_worlds(worlds):
-    """Give every world of ``worlds`` marked by ``hide_world_diffuse`` its original diffuse
-    visibility back and drop the mark; returns the names of the worlds restored."""
-    restored = []
-    for world in worlds:
-        if world.library is not None or WORLD_MARKER not in world:
+def _hold(tree, source, held):
+    """A Value/RGB node holding unlinked input ``source``'s value, linked into it; returns its
+    output socket and appends {"node", "to_node", "to_socket"} to ``held``."""
+    colour = source.type == "RGBA"
+    node = tree.nodes.new("ShaderNodeRGB" if colour else "ShaderNodeValue")
+    owner = source.node
+    node.label = f"{owner.name}: {source.name}"
+    node.location = (owner.location.x - 220.0, owner.location.y - 60.0 * len(held))
+    output = node.outputs[0]
+    output.default_value = source.default_value
+    _move_curves(tree, f'nodes["{_escape(owner.name)}"].{_input_path(source)}',
+                 f'nodes["{_escape(node.name)}"].outputs[0].default_value')
+    tree.links.new(output, source)
+    held.append({"node": node.name, "to_node": owner.name, "to_socket": source.identifier})
+    return output
+
+
+def _input_path(socket):
+    index = list(socket.node.inputs).index(socket)
+    return f"inputs[{index}].default_value"
+
+
+def release(tree, records):
+    """Undo ``_hold``: each input gets its held node's current value (and its keyframes and
+    drivers) back, unlinked; the held node is deleted."""
+    for record in reversed(records):
+        node = tree.nodes.get(record.get("node", ""))
+        owner = tree.nodes.get(record.get("to_node", ""))
+        if node is None or node.bl_idname not in ("ShaderNodeRGB", "ShaderNodeValue"):
             continue
-        try:
-            original = bool(json.loads(world[WORLD_MARKER])["diffuse"])
-        except (ValueError, KeyError, TypeError):
-            original = True  # Blender's default
-        world.cycles_visibility.diffuse = original
-        del world[WORLD_MARKER]
-        restored.append(world.name)
-    return restored
+        socket = None
+        if owner is not None:
+            socket = next((s for s in owner.inputs if s.identifier == record.get("to_socket")),
+                          None)
+        if socket is not None:
+            socket.default_value = node.outputs[0].default_value
+            _move_curves(tree, f'nodes["{_escape(node.name)}"].outputs[0].default_value',
+                         f'nodes["{_escape(owner.name)}"].{_input_path(socket)}')
+        tree.nodes.remove(node)

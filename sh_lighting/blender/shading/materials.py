@@ -42,8 +42,8 @@ import bpy
 
 from ...choices import APPLY_MODES
 from .. import compat
-from . import keep_bsdf
-from .diffuse_weight import linked_socket, no_diffuse_reason, source_node
+from . import keep_bsdf, world_diffuse
+from .diffuse_weight import diffuse_leaves, linked_socket
 from .nodes import GROUP_NAME, ensure_node_group
 
 # Custom property of the added group node: JSON {"version": 2, "mode": ..., "outputs": [...],
@@ -141,6 +141,13 @@ def apply_to_materials(materials, scene, mode=DEFAULT_MODE):
     (``keep_bsdf.hide_world_diffuse``) once a material has been changed.
     """
     check_mode(mode)
+    materials = list(materials)
+    if mode == "KEEP_BSDF":
+        names = [m.name_full for m in materials if isinstance(m, bpy.types.Material)]
+        for world in _worlds_lighting(names, scene):
+            reason = world_diffuse.problem(world)
+            if reason is not None:
+                raise world_diffuse.WorldError(f"Keep BSDF refused, nothing changed: {reason}")
     changed, skipped = [], []
     # The group, built once, when the first material gets it (an error: again next time).
     group = functools.cache(ensure_node_group)
@@ -153,15 +160,89 @@ def apply_to_materials(materials, scene, mode=DEFAULT_MODE):
             continue
         changed.append(name)
     if changed and mode == "KEEP_BSDF":
-        keep_bsdf.hide_world_diffuse(scene.world)
+        for world in _worlds_lighting(changed, scene):
+            world_diffuse.prepare(world)
     _restore_worlds_if_unused()
     return Result(changed, skipped)
+
+
+def _scene_materials(scene):
+    return {slot.material.name_full for obj in scene.objects
+            for slot in getattr(obj, "material_slots", ()) if slot.material is not None}
+
+
+def _worlds_lighting(names, scene):
+    """The worlds of ``scene`` and of every other scene showing one of the materials
+    ``names``: each must stop giving diffuse light (a world shared or not, it is one each)."""
+    worlds = {scene.world.as_pointer(): scene.world} if scene.world is not None else {}
+    wanted = set(names)
+    for other in bpy.data.scenes:
+        if other.world is not None and wanted & _scene_materials(other):
+            worlds.setdefault(other.world.as_pointer(), other.world)
+    return list(worlds.values())
+
+
+MODE_NOTES = {
+    ("KEEP_BSDF", "CYCLES"): "Cycles: SH diffuse, lamps and reflections",
+    ("KEEP_BSDF", "EEVEE"): "EEVEE: SH diffuse and lamps, no world reflections",
+    ("EMISSION", "CYCLES"): "SH alone: no lamps, shadows or reflections",
+    ("EMISSION", "EEVEE"): "SH alone: no lamps, shadows or reflections",
+}
+
+
+def lamps_of(scene):
+    """Names of the lamps that render in ``scene``."""
+    return [obj.name for obj in scene.objects if obj.type == "LIGHT" and not obj.hide_render]
+
+
+def mode_note(mode, engine):
+    """What ``mode`` does in render engine ``engine``, in a few words (for the panel)."""
+    return MODE_NOTES[(mode, "CYCLES" if engine == "CYCLES" else "EEVEE")]
+
+
+def emission_lamp_note(scene):
+    """One line when Emission Only would leave the scene's lamps out, else None."""
+    lamps = lamps_of(scene)
+    if not lamps:
+        return None
+    return (f"the scene's {len(lamps)} lamp(s) ({', '.join(lamps[:2])}"
+            f"{', ...' if len(lamps) > 2 else ''}) do not light Emission Only materials: "
+            "use Keep BSDF to keep them")
+
+
+def status_lines(scene, mode):
+    """[(icon, line)] the panel shows under Apply: what ``mode`` does in the scene's engine,
+    and what goes wrong in this scene (lamps Emission drops, light counted twice)."""
+    lines = [("INFO", mode_note(mode, scene.render.engine))]
+    if mode == "EMISSION" and lamps_of(scene):
+        lines.append(("ERROR", f"{len(lamps_of(scene))} lamp(s) will not light them"))
+    warning = keep_bsdf_warning(scene)
+    if warning is not None:
+        lines.append(("ERROR", "Diffuse light counted twice: Apply again"))
+    return lines
+
+
+def keep_bsdf_warning(scene):
+    """One line when ``scene`` shows "KEEP_BSDF" materials while its world still gives diffuse
+    light (switched after Apply, or Apply ran in another scene), else None."""
+    world = scene.world
+    if world is None or world_diffuse.is_prepared(world):
+        return None
+    applied = [name for name in sorted(_scene_materials(scene))
+               if mode_of(bpy.data.materials.get(name)) == "KEEP_BSDF"]
+    if not applied:
+        return None
+    reason = world_diffuse.problem(world)
+    if reason is not None:
+        return f"diffuse light counted twice: {reason}"
+    return (f"World '{world.name}' still gives diffuse light, which {len(applied)} Keep BSDF "
+            "material(s) also get from SH (counted twice): click Apply again")
 
 
 def _restore_worlds_if_unused():
     """The worlds' diffuse visibility back once no material of the file keeps its BSDF."""
     if not any(mode_of(m) == "KEEP_BSDF" for m in bpy.data.materials if m.library is None):
-        keep_bsdf.restore_worlds(bpy.data.worlds)
+        world_diffuse.restore_worlds(bpy.data.worlds)
 
 
 def _apply_one(material, group, mode):
@@ -237,11 +318,9 @@ def _check_editable(material):
 
 class _Plan(NamedTuple):
     outputs: list  # every Material Output node
-    active: object  # the output the BSDF was traced from, for placing the new node
-    albedo: object  # socket linked to the base colour, or None
-    albedo_value: tuple  # base colour value, used when ``albedo`` is None
-    normal: object  # socket linked to the BSDF's Normal, or None
-    bsdf: object  # the BSDF node the base colour comes from
+    active: object  # the output the surface was traced from, for placing the new node
+    leaves: list  # diffuse_weight.Leaf of the surface's diffuse shaders
+    normal: object  # socket linked to the first diffuse shader's Normal, or None
 
 
 def _plan(material):
@@ -251,34 +330,11 @@ def _plan(material):
     if not outputs:
         raise SkipMaterial("no Material Output node")
     active = next((node for node in outputs if node.is_active_output), outputs[0])
-    reason = no_diffuse_reason(active)
+    leaves, reason = diffuse_leaves(active)
     if reason is not None:
         raise SkipMaterial(reason)
-    bsdf = _traced_bsdf(active)
-    if bsdf is None:
-        candidates = [node for node in tree.nodes if node.bl_idname in BASE_COLOUR_INPUTS]
-        if len(candidates) != 1:
-            surface = source_node(active.inputs["Surface"])
-            what = f"a {surface.bl_idname} node" if surface else "nothing"
-            raise SkipMaterial(
-                f"no diffuse base colour: the surface is {what} and the material has "
-                f"{len(candidates)} Principled/Diffuse BSDF nodes (need exactly one)"
-            )
-        bsdf = candidates[0]
-    colour = bsdf.inputs[BASE_COLOUR_INPUTS[bsdf.bl_idname]]
-    return _Plan(
-        outputs=outputs,
-        active=active,
-        albedo=linked_socket(colour),
-        albedo_value=tuple(colour.default_value),
-        normal=linked_socket(bsdf.inputs.get("Normal")),
-        bsdf=bsdf,
-    )
-
-
-def _traced_bsdf(output):
-    node = source_node(output.inputs["Surface"])
-    return node if node is not None and node.bl_idname in BASE_COLOUR_INPUTS else None
+    return _Plan(outputs=outputs, active=active, leaves=leaves,
+                 normal=linked_socket(leaves[0].node.inputs.get("Normal")))
 
 
 def _surface_record(output):
@@ -298,8 +354,11 @@ def _apply(material, plan, group, mode):
     tree = material.node_tree
     record = {"version": RECORD_VERSION, "mode": mode, "added": [],
               "outputs": [_surface_record(o) for o in plan.outputs]}
+    cycles = getattr(material, "cycles", None)
+    if cycles is not None and hasattr(cycles, "emission_sampling"):
+        record["emission_sampling"] = cycles.emission_sampling
     node = tree.nodes.new("ShaderNodeGroup")
-    added = []
+    added, held = [], []
     try:
         node.node_tree = group
         if node.node_tree != group:
@@ -312,28 +371,27 @@ def _apply(material, plan, group, mode):
         node.location = (plan.active.location.x - GROUP_NODE_WIDTH - 60.0,
                          plan.active.location.y + 220.0)
         node[NODE_MARKER] = json.dumps(record)
-        weight = None
-        if mode == "KEEP_BSDF":
-            weight = keep_bsdf.diffuse_weight(tree, plan.bsdf, added)
-        if weight is not None:
-            colour = plan.albedo if plan.albedo is not None else plan.albedo_value
-            tree.links.new(keep_bsdf.weighted_albedo(tree, colour, weight, added),
-                           node.inputs["Albedo"])
-        elif plan.albedo is not None:
-            tree.links.new(plan.albedo, node.inputs["Albedo"])
-        else:
-            node.inputs["Albedo"].default_value = plan.albedo_value
+        albedo = keep_bsdf.albedo(material, plan.leaves, mode == "KEEP_BSDF", added, held)
+        tree.links.new(albedo, node.inputs["Albedo"])
         if plan.normal is not None:
             tree.links.new(plan.normal, node.inputs["Normal"])
         for output in plan.outputs:
             _drive_surface(tree, output, node, mode, added)
-        for extra in added:
-            extra.location = (node.location.x - 220.0, node.location.y)
+        for index, extra in enumerate(added):
+            extra.location = (node.location.x - 220.0 - 180.0 * (index // 6),
+                              node.location.y - 120.0 * (index % 6))
         record["added"] = [extra.name for extra in added]
+        record["held"] = held
         node[NODE_MARKER] = json.dumps(record)
+        if "emission_sampling" in record:
+            # The SH emission is light reflected, not a lamp: Cycles must not sample it as
+            # one (measured: noise at 16 spp, benchmarks/REPORT.md).
+            cycles.emission_sampling = "NONE"
+        material.update_tag()
     except Exception:
         record["added"] = [extra.name for extra in added]
-        _restore(tree, node, record)
+        record["held"] = held
+        _restore(material, node, record)
         raise
 
 
@@ -383,12 +441,13 @@ def _remove(material):
                 )
         work.append((node, record))
     for node, record in work:
-        _restore(tree, node, record)
+        _restore(material, node, record)
 
 
-def _restore(tree, node, record):
+def _restore(material, node, record):
     """Relink each recorded output still driven by ``node`` or the nodes added with it (or
-    left unlinked); delete them."""
+    left unlinked); delete them, their drivers and what else Apply set."""
+    tree = material.node_tree
     added = [tree.nodes.get(name) for name in record.get("added", ())]
     ours = {node.name, *(extra.name for extra in added if extra is not None)}
     for entry in record["outputs"]:
@@ -409,10 +468,16 @@ def _restore(tree, node, record):
         link = tree.links.new(socket, surface)
         if entry.get("muted") and hasattr(link, "is_muted"):
             link.is_muted = True
+    keep_bsdf.release(tree, record.get("held", ()))
     for extra in added:
         if extra is not None:
             tree.nodes.remove(extra)
     tree.nodes.remove(node)
+    sampling = record.get("emission_sampling")
+    cycles = getattr(material, "cycles", None)
+    if sampling is not None and cycles is not None and hasattr(cycles, "emission_sampling"):
+        cycles.emission_sampling = sampling
+    material.update_tag()
 
 
 def _output_by_identifier(node, identifier):

@@ -129,7 +129,9 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
 
     mode: bpy.props.EnumProperty(
         name="Mode", items=materials.MODE_ITEMS, default=materials.DEFAULT_MODE,
-        description="Keep the BSDF (SH replaces the world's diffuse light) or emission only",
+        description="Keep the BSDF (SH replaces the world's diffuse light) or emission only; "
+                    "unless set, the panel's Mode (the scene's apply_mode)",
+        options={"SKIP_SAVE"},
     )
 
     @classmethod
@@ -138,25 +140,44 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
 
     def execute(self, context):
         scene = context.scene
-        objects = objects_for_target(context, scene.sh_lighting.apply_target)
+        settings = scene.sh_lighting
+        mode = self.mode if self.properties.is_property_set("mode") else settings.apply_mode
+        objects = objects_for_target(context, settings.apply_target)
         mats = materials.materials_of(objects)
         bare = bare_objects_note(materials.objects_without_material(objects))
         if not mats and bare:
             self.report({"WARNING"}, f"SH lighting applied to no material: {bare}")
             return {"CANCELLED"}
+        widened = []
+        if mode == "KEEP_BSDF":
+            # The world stops lighting every diffuse surface: every material it lit gets SH
+            # (issue 20 item 9), not only the selected ones.
+            everything = materials.materials_of(scene.objects)
+            widened = [m for m in everything if m not in mats]
+            mats = everything
         try:
-            result = materials.apply_to_materials(mats, scene, self.mode)
+            result = materials.apply_to_materials(mats, scene, mode)
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         changed, skipped = len(result.changed), len(result.skipped)
-        message = f"SH lighting applied to {changed} material(s), {skipped} skipped"
+        label = dict((key, name) for key, name, _text in materials.MODE_ITEMS)[mode]
+        message = f"SH lighting ({label}) applied to {changed} material(s), {skipped} skipped"
+        if widened:
+            message += (f", {len(widened)} of them beyond the selection: Keep BSDF turns the "
+                        "world's diffuse light off for the whole scene")
         reasons = _skip_reasons(result)
         if reasons:
             message += " (" + "; ".join(reasons) + ")"
+        if mode == "KEEP_BSDF" and result.skipped:
+            message += "; the skipped ones now get no diffuse light from the world"
+        lamps = materials.emission_lamp_note(scene) if mode == "EMISSION" else None
+        if lamps and changed:
+            message += f"; {lamps}"
         if bare:
             message += f"; {bare}"
-        self.report({"WARNING"} if (skipped or bare) and not changed else {"INFO"}, message)
+        warn = ((skipped or bare) and not changed) or (lamps and changed)
+        self.report({"WARNING"} if warn else {"INFO"}, message)
         return {"FINISHED"}
 
 
@@ -175,15 +196,25 @@ class SHLIGHT_OT_remove(bpy.types.Operator):
     def execute(self, context):
         scene = context.scene
         mats = materials.materials_of(objects_for_target(context, scene.sh_lighting.apply_target))
+        widened = []
+        if any(materials.mode_of(m) == "KEEP_BSDF" for m in mats):
+            # The world gets its diffuse light back only once no Keep BSDF material is left:
+            # a material removed alone would be lit by neither.
+            keeping = [m for m in materials.materials_of(scene.objects)
+                       if materials.mode_of(m) == "KEEP_BSDF"]
+            widened = [m for m in keeping if m not in mats]
+            mats = mats + widened
         try:
             result = materials.remove_from_materials(mats)
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         changed, skipped = len(result.changed), len(result.skipped)
-        self.report(
-            {"INFO"}, f"SH lighting removed from {changed} material(s), {skipped} skipped"
-        )
+        message = f"SH lighting removed from {changed} material(s), {skipped} skipped"
+        if widened:
+            message += (f", {len(widened)} of them beyond the selection: the world lights "
+                        "diffuse surfaces again, for the whole scene")
+        self.report({"INFO"}, message)
         return {"FINISHED"}
 
 

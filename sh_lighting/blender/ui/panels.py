@@ -25,6 +25,7 @@ from ...core.minimum import negative_light_warning
 from ...core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
 from .. import scene_data
 from ..design import edits as design
+from ..shading import materials
 from ..world import reader as world
 from . import presets as presets_ui
 from . import previews
@@ -164,9 +165,13 @@ def draw_main(layout, context):
         sub.prop(settings, "capture_width", text="")
 
     layout.prop(settings, "apply_target", expand=True)
+    layout.prop(settings, "apply_mode", expand=True)
     row = layout.row(align=True)
     row.operator("shlight.apply", text="Apply", icon="MATERIAL")
     row.operator("shlight.remove", text="Remove", icon="X")
+    column = layout.column(align=True)
+    for icon, line in materials.status_lines(scene, settings.apply_mode):
+        column.label(text=line, icon=icon)
 
 
 def draw_presets_header(layout, context):

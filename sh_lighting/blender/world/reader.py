@@ -36,6 +36,7 @@ from ...core.projection import project_equirect
 from ...core.irradiance import error_estimate
 from ...core.world_map import apply_mapping
 from .. import compat
+from ..node_links import MutedLink, source_socket
 from .capture import CaptureError, capture_world
 from .images import (
     DecodeError,
@@ -140,15 +141,10 @@ def _source_socket(socket):
 
     Raises _Unsupported for muted or invalid links (what Cycles does with them is not read here).
     """
-    while socket.is_linked:
-        link = socket.links[0]
-        if link.is_muted or not link.is_valid:
-            raise _Unsupported(f"the link into '{socket.node.name}' is muted or invalid")
-        if link.from_node.type == "REROUTE":
-            socket = link.from_node.inputs[0]
-            continue
-        return link.from_socket
-    return None
+    try:
+        return source_socket(socket, strict=True)
+    except MutedLink as error:
+        raise _Unsupported(str(error)) from None
 
 
 def _active_output(tree):

@@ -1,0 +1,28 @@
+"""The one walker through reroutes: which output socket feeds a node input.
+
+Used by the world reader (``world/reader.py``) and by the material analysis
+(``shading/diffuse_weight.py``).
+"""
+
+
+class MutedLink(ValueError):
+    """A muted or invalid link where ``source_socket(..., strict=True)`` wants a real one."""
+
+
+def source_socket(socket, strict=False):
+    """The output socket feeding input ``socket``, looking through reroutes; None if unlinked.
+
+    A muted or invalid link counts as absent, or raises ``MutedLink`` when ``strict``.
+    """
+    for _ in range(10000):  # reroute chains cannot loop, but a broken file might
+        if socket is None or not socket.is_linked:
+            return None
+        link = socket.links[0]
+        if getattr(link, "is_muted", False) or not link.is_valid:
+            if strict:
+                raise MutedLink(f"the link into '{socket.node.name}' is muted or invalid")
+            return None
+        if link.from_node.bl_idname != "NodeReroute":
+            return link.from_socket
+        socket = link.from_node.inputs[0]
+    return None

@@ -1,0 +1,173 @@
+"""The world stays the camera's background but gives no diffuse light: what "KEEP_BSDF" needs.
+
+Under "KEEP_BSDF" a material's diffuse light from the world is the SH term (eq. 13 of
+Ramamoorthi and Hanrahan 2001, ``nodes.py``), so the world must not light it a second time:
+
+* **Cycles**: the world's ray visibility for diffuse rays (``World.cycles_visibility.diffuse``)
+  is switched off. Diffuse closures neither see the world through bounces nor sample it as a
+  light; glossy and transmission closures still reflect and refract it, lamps light every
+  closure.
+* **EEVEE** ignores ray visibility. Its world lighting is one capture of the world shader,
+  made with Light Path "Is Camera Ray" = 0 and "Is Glossy Ray" = 1 (measured in 4.2 and 5.0:
+  a world of Mix(black, world, Is Diffuse Ray) or Mix(black, world, max(Is Camera Ray, Is Glossy
+  Ray)) lights a diffuse sphere exactly as the world itself does), which serves diffuse and
+  glossy alike. So a World Output of target EEVEE is added (EEVEE prefers an output of its own
+  target to one of "All"), whose Surface is Mix(nothing, the world's surface, Is Camera Ray):
+  the camera sees the world, the capture sees black. In EEVEE the materials are then lit by
+  the SH term and the lamps only: the world's own reflections are not shown (``ENGINE_NOTES``).
+
+The original visibility and the names of the nodes added are kept on the world as JSON in
+``WORLD_MARKER``; each added node carries ``NODE_MARKER``. ``restore`` puts the visibility back
+and deletes exactly those nodes. What is changed is tagged for the open viewports.
+"""
+
+import json
+
+from .. import compat
+
+# Custom property of a world prepared here: JSON {"diffuse": original visibility, "nodes": [...]}.
+WORLD_MARKER = "sh_lighting_world_diffuse"
+# Custom property of the nodes added to a world's tree.
+NODE_MARKER = "sh_lighting_world_node"
+OUTPUT_NAME = "SH Lighting: EEVEE World Output"
+
+ENGINE_NOTES = {
+    "CYCLES": "Cycles: the world lights diffuse surfaces through SH only; lamps, shadows and "
+              "the world's reflections as usual",
+    "EEVEE": "EEVEE: the world lights surfaces through SH only; lamps and shadows as usual, "
+             "the world's reflections are not shown (Cycles shows them)",
+}
+
+
+class WorldError(ValueError):
+    """A world that cannot be kept from giving diffuse light (the message says why)."""
+
+
+def is_prepared(world):
+    return world is not None and WORLD_MARKER in world
+
+
+def problem(world):
+    """Why ``world``'s diffuse light cannot be switched off, or None when it can be."""
+    if world is None:
+        return None
+    if world.library is not None:
+        return (f"world '{world.name}' is linked from library '{world.library.filepath}', so "
+                "its diffuse light cannot be switched off: make it local (Object > Relations > "
+                "Make Local) or use the Emission Only mode")
+    if getattr(world, "override_library", None) is not None:
+        return (f"world '{world.name}' is a library override: make it local or use the "
+                "Emission Only mode")
+    if compat.uses_nodes(world):
+        own = [node for node in world.node_tree.nodes
+               if node.bl_idname == "ShaderNodeOutputWorld" and node.target == "EEVEE"
+               and NODE_MARKER not in node]
+        if own:
+            return (f"world '{world.name}' has a World Output of its own for EEVEE "
+                    f"('{own[0].name}'): set its target to All or use the Emission Only mode")
+    return None
+
+
+def _eevee_source(tree):
+    """The World Output EEVEE renders now (target All; active first) or None."""
+    outputs = [node for node in tree.nodes
+               if node.bl_idname == "ShaderNodeOutputWorld" and node.target == "ALL"
+               and NODE_MARKER not in node]
+    outputs.sort(key=lambda node: not node.is_active_output)
+    return outputs[0] if outputs else None
+
+
+def prepare(world):
+    """Keep ``world`` from giving diffuse light in Cycles and EEVEE (module docstring).
+
+    Already prepared: its EEVEE nodes are rebuilt (the world's surface may have been relinked).
+    WorldError, nothing changed, for a world ``problem`` refuses.
+    """
+    reason = problem(world)
+    if reason is not None:
+        raise WorldError(reason)
+    if world is None:
+        return
+    record = _record(world)
+    if record is None:
+        record = {"diffuse": bool(world.cycles_visibility.diffuse), "nodes": []}
+    _remove_nodes(world, record)
+    record["nodes"] = _add_eevee_nodes(world)
+    world[WORLD_MARKER] = json.dumps(record)
+    world.cycles_visibility.diffuse = False
+    world.update_tag()
+
+
+def _add_eevee_nodes(world):
+    if not compat.uses_nodes(world):
+        return []  # EEVEE then shows world.color: nothing to mix (4.2 only)
+    tree = world.node_tree
+    source = _eevee_source(tree)
+    surface = source.inputs["Surface"] if source is not None else None
+    linked = surface.links[0].from_socket if surface is not None and surface.is_linked else None
+    output = tree.nodes.new("ShaderNodeOutputWorld")
+    output.target = "EEVEE"
+    output.name = output.label = OUTPUT_NAME
+    path = tree.nodes.new("ShaderNodeLightPath")
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    mix.label = "Camera sees the world, EEVEE's lighting does not"
+    added = [output, path, mix]
+    x, y = (source.location.x, source.location.y) if source is not None else (300.0, 300.0)
+    output.location, mix.location, path.location = (x, y + 260), (x - 200, y + 260), (x - 400, y + 300)
+    tree.links.new(path.outputs["Is Camera Ray"], mix.inputs["Fac"])
+    if linked is not None:
+        tree.links.new(linked, mix.inputs[2])
+    tree.links.new(mix.outputs[0], output.inputs["Surface"])
+    if source is not None and source.inputs["Volume"].is_linked:
+        tree.links.new(source.inputs["Volume"].links[0].from_socket, output.inputs["Volume"])
+    for node in added:
+        node[NODE_MARKER] = True
+    output.is_active_output = True
+    if source is not None:
+        source.is_active_output = True
+    return [node.name for node in added]
+
+
+def _record(world):
+    if WORLD_MARKER not in world:
+        return None
+    try:
+        record = json.loads(world[WORLD_MARKER])
+        record["diffuse"] = bool(record["diffuse"])
+    except (ValueError, KeyError, TypeError):
+        record = {"diffuse": True}  # Blender's default
+    record["nodes"] = [n for n in record.get("nodes", ()) if isinstance(n, str)]
+    return record
+
+
+def _remove_nodes(world, record):
+    """Delete the nodes ``prepare`` added (by their mark, whatever their names now)."""
+    if world.node_tree is None:
+        return
+    tree = world.node_tree
+    for node in [node for node in tree.nodes if NODE_MARKER in node]:
+        tree.nodes.remove(node)
+
+
+def restore(world):
+    """Undo ``prepare`` on ``world``; True if it was prepared."""
+    if world is None or world.library is not None:
+        return False
+    record = _record(world)
+    if record is None:
+        return False
+    _remove_nodes(world, record)
+    world.cycles_visibility.diffuse = record["diffuse"]
+    del world[WORLD_MARKER]
+    world.update_tag()
+    return True
+
+
+def restore_worlds(worlds):
+    """``restore`` every world of ``worlds``; the names of those restored."""
+    return [world.name for world in worlds if restore(world)]
+
+
+def engine_note(engine):
+    """What "KEEP_BSDF" does in ``engine`` (a render engine id), one line."""
+    return ENGINE_NOTES["CYCLES" if engine == "CYCLES" else "EEVEE"]

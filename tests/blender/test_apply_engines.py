@@ -1,0 +1,78 @@
+"""Issue 21 item 1: the default Apply (Keep BSDF, Apply To Selected, through the operator)
+shows the stored lighting plus the lamps once, in Cycles and in EEVEE.
+
+A white diffuse sphere alone under a world of radiance 0.6 + 0.3 z (its nine coefficients are
+exact) plus a Sun lamp: after Apply each engine's render must be within 2 % of Cycles path
+tracing of the original world (which is the truth up to its noise). The world stays the
+camera's background in both.
+"""
+
+import bpy
+import numpy as np
+import pytest
+
+from benchmarks.shadow_scene import ShadowScene, covered, diffuse_material
+from sh_lighting import api
+from sh_lighting.blender import compat
+
+SIZE = 32
+SUN = ((0.5, -0.4, 0.77), 2.0)
+
+
+@pytest.fixture
+def lone_sphere(addon, hdri_dir, tmp_path):
+    s = ShadowScene(hdri_dir / "studio.exr", SIZE, tmp_path)
+    api.set_coefficients(s.scene, s.use_gradient_world())
+    s.sun = s.add_sun(*SUN)
+    bpy.data.objects.remove(s.plane)
+    s.sphere.data.materials[0] = diffuse_material("White")
+    s.scene.render.film_transparent = False
+    s.scene.eevee.taa_render_samples = 4
+    for obj in bpy.context.view_layer.objects:
+        obj.select_set(obj == s.sphere)
+    bpy.context.view_layer.objects.active = s.sphere
+    _, s.reference = s.render(256)
+    s.mask = covered(s.reference)
+    return s
+
+
+def _relative(image, s):
+    a, b = image[s.mask][:, :3].astype(np.float64), s.reference[s.mask][:, :3]
+    return float(np.abs(a - b).mean() / b.mean()), float(a.mean() / b.mean())
+
+
+def _apply_default(s):
+    assert s.scene.sh_lighting.apply_mode == "KEEP_BSDF"
+    assert s.scene.sh_lighting.apply_target == "SELECTED"
+    assert bpy.ops.shlight.apply() == {"FINISHED"}
+
+
+def _background(image):
+    return float(image[0, 0, :3].mean())
+
+
+def test_cycles_default_apply_is_the_world_once(lone_sphere):
+    s = lone_sphere
+    _apply_default(s)
+    _, image = s.render(64)
+    error, ratio = _relative(image, s)
+    print(f"\nCycles, default Apply: mean |error| {error:.4f}, brightness {ratio:.4f}")
+    assert error < 0.02 and abs(ratio - 1) < 0.02
+    assert _background(image) == pytest.approx(_background(s.reference), rel=1e-3)
+
+
+@pytest.mark.slow
+def test_eevee_default_apply_is_the_world_once(lone_sphere):
+    s = lone_sphere
+    s.scene.render.engine = compat.eevee_engine_id()
+    _, own = s.render()
+    own_error, own_ratio = _relative(own, s)
+    _apply_default(s)
+    _, image = s.render()
+    error, ratio = _relative(image, s)
+    print(f"\nEEVEE's own world lighting: error {own_error:.4f}, brightness {own_ratio:.4f}; "
+          f"default Apply: error {error:.4f}, brightness {ratio:.4f}")
+    assert error < 0.02 and abs(ratio - 1) < 0.02
+    bpy.ops.shlight.remove()
+    _, removed = s.render()
+    assert np.array_equal(removed, own)
