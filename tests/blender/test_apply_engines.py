@@ -28,7 +28,7 @@ def lone_sphere(addon, hdri_dir, tmp_path):
     s.sphere.data.materials[0] = diffuse_material("White")
     s.scene.render.film_transparent = False
     s.scene.eevee.taa_render_samples = 4
-    for obj in bpy.context.view_layer.objects:
+    for obj in s.scene.objects:
         obj.select_set(obj == s.sphere)
     bpy.context.view_layer.objects.active = s.sphere
     _, s.reference = s.render(256)

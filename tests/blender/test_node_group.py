@@ -125,6 +125,7 @@ def test_render_matches_eq13_then_follows_edits(kind, tmp_path):
     flip.inputs["Scale"].default_value = -2.0
     tree.links.new(geometry.outputs["Normal"], flip.inputs[0])
     tree.links.new(flip.outputs["Vector"], group_node.inputs["Normal"])
+    tree.links.remove(group_node.inputs["Albedo"].links[0])  # the group's own Albedo value
     group_node.inputs["Albedo"].default_value = (0.5, 0.25, 1.0, 1.0)
     rgb3, alpha3, normal3 = render(scene, tmp_path / "c.exr")
     check_against_core(

@@ -17,7 +17,7 @@ from numpy.testing import assert_allclose
 
 from sh_lighting import api
 from sh_lighting.blender import compat, properties, scene_data
-from sh_lighting.blender.shading import materials
+from sh_lighting.blender.shading import materials, notes
 from sh_lighting.blender.ui import operators
 from sh_lighting.blender.world import compute
 from sh_lighting.blender.world import reader as world
@@ -360,16 +360,19 @@ def test_apply_and_remove_selected_then_all(addon):
     (lit, lit_mat), (other, other_mat) = two_objects_with_materials()
     scene_data.store(scene, KNOWN, SCRIPT)
 
-    result, reports = run_execute(operators.SHLIGHT_OT_apply, mode="KEEP_BSDF")
+    result, reports = run_execute(operators.SHLIGHT_OT_apply, mode="EMISSION")
     assert result == {"FINISHED"}
-    assert reports == [({"INFO"}, "SH lighting applied to 1 material(s), 0 skipped")]
+    assert reports == [({"INFO"}, "SH lighting (Emission Only) applied to 1 material(s), "
+                                  "0 skipped")]
     assert materials.is_applied(lit_mat) and not materials.is_applied(other_mat)
 
     scene.sh_lighting.apply_target = "ALL"
-    assert bpy.ops.shlight.apply() == {"FINISHED"}
-    assert materials.is_applied(lit_mat) and materials.is_applied(other_mat)
+    assert bpy.ops.shlight.apply() == {"FINISHED"}  # the panel's Mode: Keep BSDF
+    assert materials.mode_of(lit_mat) == materials.mode_of(other_mat) == "KEEP_BSDF"
 
     scene.sh_lighting.apply_target = "SELECTED"
+    result, reports = run_execute(operators.SHLIGHT_OT_apply, mode="EMISSION")
+    assert materials.mode_of(lit_mat) == "EMISSION" and materials.mode_of(other_mat) == "KEEP_BSDF"
     result, reports = run_execute(operators.SHLIGHT_OT_remove)
     assert result == {"FINISHED"}
     assert reports == [({"INFO"}, "SH lighting removed from 1 material(s), 0 skipped")]
@@ -379,6 +382,42 @@ def test_apply_and_remove_selected_then_all(addon):
     result, reports = run_execute(operators.SHLIGHT_OT_remove)
     assert reports == [({"INFO"}, "SH lighting removed from 1 material(s), 1 skipped")]
     assert not materials.is_applied(other_mat)
+
+
+def test_keep_bsdf_on_the_selection_lights_every_material_the_world_lit(addon):
+    """Issue 20 item 9: Keep BSDF switches the world's diffuse light off for the whole scene,
+    so Apply To Selected (the default) gives every material SH, and says so; Remove likewise."""
+    scene = bpy.context.scene
+    (lit, lit_mat), (other, other_mat) = two_objects_with_materials()
+    scene_data.store(scene, KNOWN, SCRIPT)
+    assert scene.sh_lighting.apply_target == "SELECTED"
+    result, reports = run_execute(operators.SHLIGHT_OT_apply)  # the defaults
+    assert result == {"FINISHED"} and materials.mode_of(other_mat) == "KEEP_BSDF"
+    assert reports == [({"INFO"}, "SH lighting (Keep BSDF) applied to 2 material(s), 0 skipped, "
+                                  "1 of them beyond the selection: Keep BSDF turns the world's "
+                                  "diffuse light off for the whole scene")]
+    result, reports = run_execute(operators.SHLIGHT_OT_remove)
+    assert not materials.is_applied(other_mat) and not materials.is_applied(lit_mat)
+    assert "1 of them beyond the selection" in reports[0][1]
+
+
+def test_panel_says_what_the_mode_does_and_what_emission_drops(addon):
+    """Issue 23 item 5 / issue 21 item 1: the Mode beside Apply, a line for the engine, a line
+    when Emission Only would leave the scene's lamps out (and Apply's report says it)."""
+    scene = bpy.context.scene
+    two_objects_with_materials()
+    scene_data.store(scene, KNOWN, SCRIPT)
+    scene.render.engine = "CYCLES"
+    assert notes.status_lines(scene, "KEEP_BSDF") == [
+        ("INFO", "Cycles: SH diffuse, lamps and reflections")]
+    scene.render.engine = compat.eevee_engine_id()
+    assert "no world reflections" in notes.status_lines(scene, "KEEP_BSDF")[0][1]
+    lamp = bpy.data.objects.new("Key", bpy.data.lights.new("Key", "SUN"))
+    scene.collection.objects.link(lamp)
+    assert ("ERROR", "1 lamp(s) will not light them") in notes.status_lines(scene, "EMISSION")
+    scene.sh_lighting.apply_mode = "EMISSION"
+    result, reports = run_execute(operators.SHLIGHT_OT_apply)
+    assert reports[0][0] == {"WARNING"} and "lamp(s) (Key) do not light" in reports[0][1]
 
 
 def test_apply_api_matches_operator(addon):
@@ -412,7 +451,8 @@ def test_apply_reports_objects_without_a_material(addon):
     scene.sh_lighting.apply_target = "ALL"
     result, reports = run_execute(operators.SHLIGHT_OT_apply, mode="KEEP_BSDF")
     assert result == {"FINISHED"}
-    assert reports == [({"INFO"}, "SH lighting applied to 2 material(s), 0 skipped; 2 object(s) "
+    assert reports == [({"INFO"}, "SH lighting (Keep BSDF) applied to 2 material(s), 0 skipped; "
+                                  "2 object(s) "
                         "have no material (Bare, Empty Slot): give them a material first")]
 
 

@@ -11,7 +11,7 @@ import time
 import bpy
 
 from .. import scene_data
-from ..shading import materials
+from ..shading import materials, notes
 from ..world import compute
 from .polls import coefficients_poll, scene_poll, world_poll
 
@@ -128,9 +128,12 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     mode: bpy.props.EnumProperty(
-        name="Mode", items=materials.MODE_ITEMS, default=materials.DEFAULT_MODE,
+        name="Mode",
+        items=(("SCENE", "Panel's Mode", "The Mode chosen in the panel (the scene's setting)"),
+               *materials.MODE_ITEMS),
+        default="SCENE",
         description="Keep the BSDF (SH replaces the world's diffuse light) or emission only; "
-                    "unless set, the panel's Mode (the scene's apply_mode)",
+                    "by default the Mode chosen in the panel",
         options={"SKIP_SAVE"},
     )
 
@@ -141,7 +144,9 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
     def execute(self, context):
         scene = context.scene
         settings = scene.sh_lighting
-        mode = self.mode if self.properties.is_property_set("mode") else settings.apply_mode
+        mode = getattr(self, "mode", "SCENE")
+        if mode == "SCENE":
+            mode = settings.apply_mode
         objects = objects_for_target(context, settings.apply_target)
         mats = materials.materials_of(objects)
         bare = bare_objects_note(materials.objects_without_material(objects))
@@ -171,7 +176,7 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
             message += " (" + "; ".join(reasons) + ")"
         if mode == "KEEP_BSDF" and result.skipped:
             message += "; the skipped ones now get no diffuse light from the world"
-        lamps = materials.emission_lamp_note(scene) if mode == "EMISSION" else None
+        lamps = notes.emission_lamp_note(scene) if mode == "EMISSION" else None
         if lamps and changed:
             message += f"; {lamps}"
         if bare:

@@ -25,7 +25,7 @@ from ...core.minimum import negative_light_warning
 from ...core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
 from .. import scene_data
 from ..design import edits as design
-from ..shading import materials
+from ..shading import notes
 from ..world import reader as world
 from . import presets as presets_ui
 from . import previews
@@ -170,7 +170,7 @@ def draw_main(layout, context):
     row.operator("shlight.apply", text="Apply", icon="MATERIAL")
     row.operator("shlight.remove", text="Remove", icon="X")
     column = layout.column(align=True)
-    for icon, line in materials.status_lines(scene, settings.apply_mode):
+    for icon, line in notes.status_lines(scene, settings.apply_mode):
         column.label(text=line, icon=icon)
 
 
