@@ -50,3 +50,12 @@ def test_bake_transfer_refusal_is_one_line_and_saves_nothing(tmp_path):
         "sh_lighting: error: 'Box' has modifiers (Bevel): the transfer is stored on the mesh "
         "itself, so apply them (or disable them for renders) and bake again; nothing saved"]
     assert not out.exists()
+
+
+def test_bake_transfer_help_lists_its_options():
+    result = run("bake-transfer", "--help")
+    assert result.returncode == 0, result.stderr
+    for word in ("BLEND", "--out", "--in-place", "--objects", "--samples", "--error-target",
+                 "--apply", "--mode"):
+        assert word in result.stdout
+    assert "bake-transfer" in run("--help").stdout
