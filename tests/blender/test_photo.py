@@ -121,9 +121,13 @@ def test_round_trip_photo_match_apply_render_matches_the_photo(photos, addon, tm
 
     difference = np.abs(codes(rendered[inside]) - codes(photo[inside]))
     # The photo's own render noise (32 spp, 2.4 % per pixel) is in it; the fit averages it
-    # out. Measured: RMS 2.2 codes, mean 0.3 codes (the bias: within 8-bit quantisation).
-    assert np.mean(codes(rendered[inside]) - codes(photo[inside])) == pytest.approx(0.0, abs=0.5)
-    assert np.sqrt(np.mean(difference ** 2)) < 4.0
+    # out, so the difference is the photo's noise; its mean (the bias) is within the 8-bit
+    # quantisation.
+    bias = float(np.mean(codes(rendered[inside]) - codes(photo[inside])))
+    spread = float(np.sqrt(np.mean(difference ** 2)))
+    print(f"\n  round trip, nine-term world: bias {bias:+.2f} codes, RMS {spread:.2f} codes")
+    assert abs(bias) < 0.5
+    assert spread < 1.5  # measured 0.87 (quantisation alone: 0.29)
 
 
 def test_exposure_against_the_world(photos, addon):
@@ -220,3 +224,36 @@ def test_error_against_added_noise_and_a_hidden_quarter(photos, addon):
     assert full[0.0][0] < full[0.05][0] < full[0.2][0]
     assert quarter[0.0][0] < EXACT_BOUND and quarter[0.2][0] < 0.02
     assert quarter[0.0][2] > full[0.0][2] > 10.0  # the condition number
+
+
+def test_round_trip_under_a_real_hdri_is_within_the_nine_term_limit(photos, addon, tmp_path):
+    """photo (courtyard, 8-bit, 85 mm) → Match Photo → Apply → render from the photo's camera:
+    the render differs from the photo by the nine-term limit and the photo's own noise.
+    Compared on 4×4 pixel blocks inside 0.9 r (block means: the photo's noise / 4), the noise
+    (``PhotoFit.noise`` / 4) taken out in quadrature."""
+    scene, material = grey_ball_scene(photos["hdri"], "PERSP")
+    result = bpy.ops.shlight.match_photo(filepath=photos["hdri_png"], circle=circle_of("PERSP"),
+                                         prior="none")
+    assert result == {"FINISHED"}
+    _, fit = api.coefficients_from_photo(scene, photos["hdri_png"], circle_of("PERSP"),
+                                         prior="none", store=False)
+    api.apply_to_materials([material], scene)
+    rendered = linear(render_exr(scene, tmp_path / "round_trip.exr"))
+    photo = linear(photos["hdri_png"])
+    cx, cy, r = circle_of("PERSP")
+    yy, xx = np.mgrid[:SIZE, :SIZE] + 0.5
+    inside = np.hypot(xx - cx, yy - cy) < 0.9 * r
+    blocks = inside.reshape(SIZE // 4, 4, SIZE // 4, 4).all(axis=(1, 3))
+
+    def block_means(image):
+        return image.reshape(SIZE // 4, 4, SIZE // 4, 4, 3).mean(axis=(1, 3))[blocks]
+
+    difference = relative_rms(block_means(rendered), block_means(photo))
+    misfit = np.sqrt(max(difference**2 - (fit.noise / 4.0) ** 2, 0.0))
+    pixels = linear(photos["hdri"])
+    normals = fit.normals[::3]
+    limit = best_nine_term_error(normals, reference_irradiance(block_downsample(pixels, 4)[0],
+                                                               normals))
+    print(f"\n  round trip under courtyard: blocks differ {100 * difference:.2f} %, less the noise "
+          f"{100 * misfit:.2f} %, nine-term limit {100 * limit:.2f} %")
+    assert misfit <= HEADROOM * limit, (difference, misfit, limit, fit.noise)
