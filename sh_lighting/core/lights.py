@@ -41,6 +41,7 @@ measure), the worst channel's; a channel without light (P ≤ 0: a map with no b
 map) has no relative error and is left out, so such maps extract like any other.
 """
 
+import numbers
 from dataclasses import dataclass
 from math import degrees, pi
 
@@ -287,6 +288,12 @@ def remove_light(pixels, light):
     return out
 
 
+def real_number(value):
+    """Whether ``value`` is a finite real number (not a bool, a string or None)."""
+    return (isinstance(value, numbers.Real) and not isinstance(value, bool)
+            and np.isfinite(value))
+
+
 def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST,
                    peak_fraction=PEAK_FRACTION, max_radius=MAX_RADIUS,
                    min_power_fraction=MIN_POWER_FRACTION, normals=None, luminance=LUMINANCE):
@@ -302,15 +309,15 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
     """
     luminance = np.asarray(luminance, dtype=np.float64)
     a = check_finite_pixels(check_pixels(pixels))
-    if not 0 <= int(count) <= MAX_COUNT or int(count) != count:
+    if not (real_number(count) and count == int(count) and 0 <= count <= MAX_COUNT):
         raise ValueError(f"the number of lights must be a whole number from 0 to {MAX_COUNT}, "
                          f"got {count!r}")
-    if error_target is not None and not error_target > 0.0:
+    if error_target is not None and not (real_number(error_target) and error_target > 0.0):
         raise ValueError(f"the error target must be a fraction above 0, got {error_target!r}")
-    if not 0.0 < max_radius <= LARGEST_RADIUS:
+    if not (real_number(max_radius) and 0.0 < max_radius <= LARGEST_RADIUS):
+        got = f"{degrees(2 * max_radius):g}°" if real_number(max_radius) else repr(max_radius)
         raise ValueError(f"the size limit must be above 0° and at most "
-                         f"{degrees(2 * LARGEST_RADIUS):.0f}° across, got "
-                         f"{degrees(2 * max_radius):g}°")
+                         f"{degrees(2 * LARGEST_RADIUS):.0f}° across, got {got}")
     n = spread_normals(ERROR_NORMALS) if normals is None else np.asarray(normals, float)
     height, width, _ = a.shape
     solid = texel_solid_angles(height, width)

@@ -379,8 +379,14 @@ def test_a_bright_window_is_reported_with_what_would_take_it(addon, tmp_path):
     assert len(wider.lights) >= 1 and wider.extraction.lights[0].power_fraction > 0.45
     errors = wider.extraction.errors
     assert errors[-1][0] < 0.5 * errors[0][0]
-    with pytest.raises(ValueError, match="size limit must be above 0° and at most 120°"):
-        api.extract_lights(scene, count=1, size_limit=math.radians(130.0))
+    before = scene_data.get_coefficients(scene)
+    for bad in (math.radians(130.0), "x", None):
+        with pytest.raises(ValueError, match="size limit must be above 0° and at most 120°"):
+            api.extract_lights(scene, count=1, size_limit=bad)
+    for bad in ("x", 1.5, None):
+        with pytest.raises(ValueError, match="number of lights must be a whole number"):
+            api.extract_lights(scene, count=bad)
+    np.testing.assert_array_equal(scene_data.get_coefficients(scene), before)
 
 
 def test_the_report_names_the_image_the_errors_and_the_time(addon, tmp_path):

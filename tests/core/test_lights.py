@@ -86,11 +86,15 @@ def test_count_zero_target_and_bad_arguments():
     np.testing.assert_allclose(none.coefficients, project_equirect(pixels))
     one = core_lights.extract_lights(pixels, count=8, error_target=0.9 * none.errors[0][0])
     assert len(one.lights) == 1 and one.errors[-1][0] <= 0.9 * none.errors[0][0]
-    for bad in (-1, 9, 1.5):
+    for bad in (-1, 9, 1.5, "3", "x", None, float("nan"), True):
         with pytest.raises(ValueError, match="whole number from 0 to 8"):
             core_lights.extract_lights(pixels, count=bad)
-    with pytest.raises(ValueError, match="error target"):
-        core_lights.extract_lights(pixels, error_target=0.0)
+    for bad in (0.0, "x", float("nan"), [0.1]):
+        with pytest.raises(ValueError, match="error target must be a fraction above 0"):
+            core_lights.extract_lights(pixels, error_target=bad)
+    for bad in ("x", None, float("inf"), 0.0):
+        with pytest.raises(ValueError, match="size limit must be above 0° and at most 120°"):
+            core_lights.extract_lights(pixels, max_radius=bad)
 
 
 def test_uniform_sky_has_no_light():

@@ -201,6 +201,11 @@ def _check_lights(extraction, strength):
                 "image's values")
 
 
+def _half(size_limit):
+    """The size limit's radius for the core, or the value as it is for the core to refuse."""
+    return 0.5 * size_limit if core_lights.real_number(size_limit) else size_limit
+
+
 def extract_lights(scene, count=3, error_target=None, size_limit=SIZE_LIMIT):
     """Take up to ``count`` lights out of the world image (module docstring); ``LightsInfo``.
 
@@ -227,7 +232,7 @@ def extract_lights(scene, count=3, error_target=None, size_limit=SIZE_LIMIT):
         raise design.DesignError(
             f"world '{source.world}' has Strength {strength:g}: no light to extract")
     extraction = core_lights.extract_lights(source.pixels(), count, error_target,
-                                             max_radius=0.5 * float(size_limit),
+                                             max_radius=_half(size_limit),
                                              luminance=design.luminance())
     rest = map_coefficients(extraction.rest, strength, source.rotation)
     scene_data.validate(rest)  # fail before anything changes

@@ -61,7 +61,7 @@ class SHLIGHT_OT_extract_lights(bpy.types.Operator):
 
 
 def draw_lights(layout):
-    """The Extract Lights button and how many lights the scene holds (for the panel)."""
+    """The Extract Lights button (for the Design panel)."""
     layout.operator("shlight.extract_lights", icon="LIGHT_SUN")
 
 
