@@ -18,7 +18,7 @@ Stored per face corner (each corner has its face's normal: hard edges stay hard)
 colour attributes ``ATTRIBUTE_NAMES`` (FLOAT_COLOR, CORNER; RGB: interreflection off coloured
 materials makes T_lm coloured), read by the "SH Transfer" node group (``transfer.nodes``)
 with Attribute nodes, so a saved .blend renders without the add-on. The object keeps a JSON
-record ``RECORD`` (samples, seconds, and the fingerprints ``status`` compares: its own
+record ``RECORD`` (samples, seconds, and the fingerprints ``stale.status`` compares: its own
 geometry and placement, and the scene's renderable objects) so the panel can say the bake is
 stale after an edit.
 
@@ -30,27 +30,25 @@ Emission mode then reflects no light into the bake, which ``BakeInfo.notes`` say
 
 import json
 import time
-import zlib
 from typing import NamedTuple
 
 import bpy
 import numpy as np
 
 from ...core.sh import COEFFICIENT_NAMES
-from ..scene_data import PROPERTY_NAMES
 from ..shading import materials
 from . import basis
+from .stale import (  # noqa: F401 (re-exported: the bake's names in one place)
+    ATTRIBUTE_NAMES, RECORD, RECORD_VERSION, geometry_fingerprint, record, remove_transfer,
+    scene_fingerprint, status,
+)
 
-ATTRIBUTE_NAMES = tuple(name.replace("sh_L", "sh_T", 1) for name in PROPERTY_NAMES)
 SCRATCH_NAME = "sh_transfer_bake"
-RECORD = "sh_transfer"
-RECORD_VERSION = 1
 #: Cycles samples per corner: measured on the test scene (plane and box, tests/blender/
 #: test_transfer.py): the relative RMSE of T against a 1024-sample bake falls as 1/√samples
 #: (benchmarks/REPORT.md, "Transfer").
 DEFAULT_SAMPLES = 64
 MAX_SAMPLES = 1 << 16
-RENDERED_TYPES = {"MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES", "POINTCLOUD", "VOLUME"}
 
 
 class TransferError(ValueError):
@@ -337,85 +335,3 @@ def _view_layer(scene):
     if bpy.context.scene == scene and context_layer is not None:
         return context_layer
     return scene.view_layers[0]
-
-
-# --- Staleness -----------------------------------------------------------------------------
-
-
-def geometry_fingerprint(obj):
-    """Vertex and corner counts and a CRC of the coordinates, corner vertices and placement."""
-    mesh = obj.data
-    coordinates = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
-    mesh.vertices.foreach_get("co", coordinates)
-    corners = np.empty(len(mesh.loops), dtype=np.int32)
-    mesh.loops.foreach_get("vertex_index", corners)
-    crc = zlib.crc32(coordinates.tobytes())
-    crc = zlib.crc32(corners.tobytes(), crc)
-    crc = zlib.crc32(np.array(obj.matrix_world, dtype=np.float32).tobytes(), crc)
-    return f"{len(mesh.vertices)}:{len(mesh.loops)}:{crc:08x}"
-
-
-def scene_fingerprint(scene):
-    """A CRC over the scene's rendered objects and instancers: names, placement, mesh
-    coordinates (an occluder's material or a geometry-nodes edit keeping them is not seen)."""
-    crc = 0
-    for obj in sorted(scene.objects, key=lambda o: o.name):
-        instancing = obj.instance_type != "NONE"
-        if (obj.type not in RENDERED_TYPES and not instancing) or obj.hide_render:
-            continue
-        crc = zlib.crc32(obj.name.encode(), crc)
-        crc = zlib.crc32(np.array(obj.matrix_world, dtype=np.float32).tobytes(), crc)
-        if obj.type == "MESH":
-            coordinates = np.empty(len(obj.data.vertices) * 3, dtype=np.float32)
-            obj.data.vertices.foreach_get("co", coordinates)
-            crc = zlib.crc32(coordinates.tobytes(), crc)
-    return f"{crc:08x}"
-
-
-def record(obj):
-    """The object's bake record (dict) or None if it was never baked or is unreadable."""
-    text = obj.get(RECORD) if obj is not None else None
-    if not isinstance(text, str):
-        return None
-    try:
-        value = json.loads(text)
-    except ValueError:
-        return None
-    return value if isinstance(value, dict) else None
-
-
-def status(scene, obj, scene_print=None):
-    """(state, message): ("NONE", …) never baked, ("OK", …) or ("STALE", what changed).
-
-    ``scene_print``: ``scene_fingerprint(scene)`` if already computed (a panel listing many
-    objects computes it once).
-    """
-    info = record(obj)
-    if info is None or obj.type != "MESH":
-        return "NONE", f"'{obj.name}' has no transfer bake"
-    missing = [n for n in ATTRIBUTE_NAMES if obj.data.color_attributes.get(n) is None]
-    if missing:
-        return "STALE", f"'{obj.name}': the transfer attributes were removed: bake again"
-    if info.get("geometry") != geometry_fingerprint(obj):
-        return "STALE", f"'{obj.name}' was edited or moved since the bake: bake again"
-    if info.get("scene") != (scene_print or scene_fingerprint(scene)):
-        return "STALE", (
-            f"'{obj.name}': objects of the scene changed since the bake (moved, edited, "
-            "added, hidden or removed): bake again"
-        )
-    return "OK", (f"'{obj.name}': baked, {info.get('samples')} samples, "
-                  f"{info.get('seconds')} s")
-
-
-def remove_transfer(obj):
-    """Delete the bake's attributes and record from ``obj``; True if there was one."""
-    found = obj.get(RECORD) is not None
-    if RECORD in obj:
-        del obj[RECORD]
-    if obj.type == "MESH":
-        for name in ATTRIBUTE_NAMES:
-            attribute = obj.data.color_attributes.get(name)
-            if attribute is not None:
-                obj.data.color_attributes.remove(attribute)
-                found = True
-    return found
