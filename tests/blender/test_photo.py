@@ -257,3 +257,14 @@ def test_round_trip_under_a_real_hdri_is_within_the_nine_term_limit(photos, addo
     print(f"\n  round trip under courtyard: blocks differ {100 * difference:.2f} %, less the noise "
           f"{100 * misfit:.2f} %, nine-term limit {100 * limit:.2f} %")
     assert misfit <= HEADROOM * limit, (difference, misfit, limit, fit.noise)
+
+
+def test_the_image_editor_drag_gives_the_circle_in_pixels(addon):
+    from sh_lighting.blender.ui.photo import circle_from_drag
+
+    # a 200×100 image: centre at u 0.25, v 0.75 (a quarter from the left, a quarter from the
+    # top), rim 30 px to the right
+    cx, cy, r = circle_from_drag((200, 100), (0.25, 0.75), (0.25 + 30 / 200, 0.75))
+    assert (cx, cy) == pytest.approx((50.0, 25.0)) and r == pytest.approx(30.0)
+    assert circle_from_drag((200, 100), (0.5, 0.5), (0.5, 0.3))[2] == pytest.approx(20.0)
+    assert not bpy.ops.shlight.photo_circle.poll()  # no Image Editor in background mode

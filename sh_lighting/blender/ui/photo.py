@@ -1,4 +1,5 @@
-"""Match Photo in the UI: the operator (a dialog of its settings) and its sub-panel.
+"""Match Photo in the UI: the operator (a dialog of its settings), its sub-panel, and a drag
+in the Image Editor (Image > Match Photo: Drag the Ball's Circle) that gives the circle.
 
 The settings are the operator's own properties (Blender remembers the last ones used in the
 session): nothing transient is stored in the scene; what was fitted is recorded in the
@@ -128,6 +129,69 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def circle_from_drag(size, start_uv, end_uv):
+    """(cx, cy, r) in pixels from the top-left corner of a ``size`` (width, height) image, of
+    a drag from the ball's centre ``start_uv`` to its rim ``end_uv`` (Image Editor view
+    coordinates: u right, v up, both 0 to 1 across the image)."""
+    width, height = size
+    cx, cy = start_uv[0] * width, (1.0 - start_uv[1]) * height
+    ex, ey = end_uv[0] * width, (1.0 - end_uv[1]) * height
+    return cx, cy, ((ex - cx) ** 2 + (ey - cy) ** 2) ** 0.5
+
+
+class SHLIGHT_OT_photo_circle(bpy.types.Operator):
+    """Drag from the ball's centre to its rim in the Image Editor, then Match Photo with that
+    circle and the image's file"""
+
+    bl_idname = "shlight.photo_circle"
+    bl_label = "Match Photo: Drag the Ball's Circle"
+    bl_options = {"REGISTER"}
+
+    @classmethod
+    def poll(cls, context):
+        space = context.space_data
+        if space is None or space.type != "IMAGE_EDITOR" or space.image is None:
+            cls.poll_message_set("Open the ball's photo in an Image Editor first")
+            return False
+        if not space.image.filepath:
+            cls.poll_message_set("The image has no file: save it, Match Photo reads a file")
+            return False
+        return True
+
+    def invoke(self, context, event):
+        self._start = None
+        context.window_manager.modal_handler_add(self)
+        context.area.header_text_set("Drag from the ball's centre to its rim (Esc: cancel)")
+        return {"RUNNING_MODAL"}
+
+    def _uv(self, context, event):
+        return context.region.view2d.region_to_view(event.mouse_region_x, event.mouse_region_y)
+
+    def modal(self, context, event):
+        if event.type in {"ESC", "RIGHTMOUSE"}:
+            context.area.header_text_set(None)
+            return {"CANCELLED"}
+        if event.type == "LEFTMOUSE" and event.value == "PRESS":
+            self._start = self._uv(context, event)
+        elif event.type == "MOUSEMOVE" and self._start is not None:
+            circle = circle_from_drag(context.space_data.image.size, self._start,
+                                      self._uv(context, event))
+            context.area.header_text_set("Circle: centre ({:.0f}, {:.0f}), radius {:.0f} px"
+                                         .format(*circle))
+        elif event.type == "LEFTMOUSE" and event.value == "RELEASE" and self._start:
+            context.area.header_text_set(None)
+            image = context.space_data.image
+            circle = circle_from_drag(image.size, self._start, self._uv(context, event))
+            bpy.ops.shlight.match_photo("INVOKE_DEFAULT", filepath=image.filepath,
+                                        circle=circle)
+            return {"FINISHED"}
+        return {"RUNNING_MODAL"}
+
+
+def draw_image_menu(self, context):
+    self.layout.operator(SHLIGHT_OT_photo_circle.bl_idname, icon="IMAGE_DATA")
+
+
 def draw_photo(layout, context):
     """The Match Photo button and where the current values came from, if a photo."""
     layout.operator(SHLIGHT_OT_match_photo.bl_idname, icon="IMAGE_DATA")
@@ -140,5 +204,16 @@ def draw_photo(layout, context):
 SHLIGHT_PT_world_photo, SHLIGHT_PT_view3d_photo = sub_panels(
     "photo", "Photo", draw_photo, options=("DEFAULT_CLOSED",))
 
-classes = (SHLIGHT_OT_match_photo, SHLIGHT_PT_world_photo, SHLIGHT_PT_view3d_photo)
-register, unregister = bpy.utils.register_classes_factory(classes)
+classes = (SHLIGHT_OT_match_photo, SHLIGHT_OT_photo_circle, SHLIGHT_PT_world_photo,
+           SHLIGHT_PT_view3d_photo)
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    _register_classes()
+    bpy.types.IMAGE_MT_image.append(draw_image_menu)  # Image Editor > Image
+
+
+def unregister():
+    bpy.types.IMAGE_MT_image.remove(draw_image_menu)
+    _unregister_classes()
