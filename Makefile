@@ -53,6 +53,7 @@ bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_prefilter
 	$(PY) -m benchmarks.bench_tables
 	$(PY) -m benchmarks.report
+	$(PY) -m benchmarks.bench_real_scene
 	$(PY) -m benchmarks.bench_sizes
 	$(PY) -m benchmarks.bench_photo
 

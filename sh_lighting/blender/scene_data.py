@@ -257,6 +257,18 @@ def forget_note():
     _last_note = ""
 
 
+def add_missing_gains(scene):
+    """Gains s = 1 for the coefficients of ``scene`` that have none (files from before the
+    gains render as before), with their UI data and a tag; returns the names written."""
+    missing = [g for n, g in zip(PROPERTY_NAMES, GAIN_NAMES) if n in scene and g not in scene]
+    for name in missing:
+        scene[name] = 1.0
+    if missing:
+        ensure_ui(scene)
+        scene.update_tag()
+    return missing
+
+
 def store(scene, coeffs, provenance, animation=DEFAULT_ANIMATION, gains="UNIT"):
     """Write (9, 3) L_lm on ``scene`` as c = ``coeffs``, s = 1: the one write of coefficients.
 

@@ -423,3 +423,16 @@ def test_sh_render_vs_path_traced_hdri(tmp_path, hdri_dir):
     assert noise < 0.01, report  # the path tracer converged to eq. 1
     assert abs(rendered - predicted) <= noise + 0.002, report
     assert residual <= 1.5 * noise + 0.002, report
+
+
+def test_gains_added_for_an_old_file_go_through_scene_data():
+    """Review (issue 20): ensure_node_group wrote missing gains directly, without their UI data
+    or a tag; now through scene_data.add_missing_gains."""
+    scene = bpy.context.scene
+    scene_data.store(scene, COEFFS, SCRIPT)
+    for name in scene_data.GAIN_NAMES:
+        del scene[name]  # a file from before the gains
+    nodes.ensure_node_group()
+    assert all(scene[name] == 1.0 for name in scene_data.GAIN_NAMES)
+    ui = scene.id_properties_ui(scene_data.GAIN_NAMES[0]).as_dict()
+    assert ui.get("description") == scene_data.gain_description(0)

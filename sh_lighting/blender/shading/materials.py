@@ -3,34 +3,33 @@
 Two modes (``MODES``):
 
 * "KEEP_BSDF" (the default): the material keeps its BSDF, so lamps (with their shadows),
-  glossy and coat reflections of the world and transmission keep working, and the group's
-  Emission (the diffuse weight of the BSDF × E/π) is added to it, replacing the world's
-  diffuse light, which the world then no longer gives to diffuse rays in Cycles
-  (``keep_bsdf``: the weight, the world's ray visibility, what EEVEE cannot do).
-* "EMISSION": the group's Emission alone drives the Surface (albedo · E/π): exact, noise free
-  at one sample, but nothing else lights the material (no lamps, no reflections).
+  glossy and coat reflections of the world (Cycles) and transmission keep working, and the
+  group's Emission (the surface's diffuse albedo × E/π, eq. 13 of Ramamoorthi and Hanrahan
+  2001) is added to it, replacing the world's diffuse light, which the world then no longer
+  gives, in Cycles or EEVEE (``world_diffuse``; in EEVEE the world lights nothing but the
+  camera's background, so its reflections are not shown either).
+* "EMISSION": the group's Emission alone drives the Surface: exact, noise free at one sample,
+  but nothing else lights the material (no lamps, no reflections; ``notes`` says so in the
+  panel and at Apply).
 
-``apply_to_materials`` adds one group node per material. Its Albedo comes from the material's
-diffuse base colour (Principled BSDF "Base Color" or Diffuse BSDF "Color": the node linked to it,
-or its value), its Normal from that BSDF's linked Normal input if any (normal and bump maps
-keep working), and its "Shader" output drives (KEEP_BSDF: is added to) the Surface of every
-Material Output node, so Cycles and EEVEE outputs agree. The links it replaces are recorded
-as JSON in the custom property ``NODE_MARKER`` of the added node (with the mode and the names of the other nodes it
-added: the Add Shader and the weight's Math nodes); ``remove_from_materials`` relinks them and
-deletes those nodes, which also deletes the links into them, and gives each world its diffuse
-visibility back once no material of the file is in "KEEP_BSDF" mode. Nothing else in the
-material is touched.
+``apply_to_materials`` adds one group node per material. Its Albedo is the diffuse albedo of
+what the active Material Output renders (``keep_bsdf.albedo``: the diffuse leaves of the
+surface with their Mix factors, Alpha, Metallic, ...; every input followed, never copied), its
+Normal the first diffuse BSDF's linked Normal input if any (normal and bump maps keep
+working), and its "Shader" output drives (KEEP_BSDF: is added to) the Surface of every Material
+Output node. The links it replaces are recorded as JSON in the custom property ``NODE_MARKER``
+of the added node (with the mode, the names of the other nodes it added, the inputs it gave
+a Value/RGB node, and the material's Cycles Emission Sampling, set to None: the SH emission
+is reflected light, not a lamp); ``remove_from_materials`` puts all of it back and deletes
+those nodes, and gives each world its diffuse light back once no material of the file is in
+"KEEP_BSDF" mode. Applying to a material that already has the group first removes it, then
+applies it again (a refresh: nothing stacks).
 
-The BSDF is the one linked to the active Material Output's Surface (through reroutes), or
-else the only Principled/Diffuse BSDF of the material. Applying to a material that already has
-the group first removes it, then applies it again (a refresh: nothing stacks).
-
-Materials without a diffuse part are left alone and reported as skipped: a Surface made only of
-(mixes and sums of) Emission, Glass, Refraction, Transparent, Holdout, Glossy, Metallic, hair,
-Ray Portal or Background shaders, or of a Principled BSDF whose unlinked Metallic or
-Transmission Weight is 1; an unconnected Surface (volume-only or empty). A node group in the
-surface counts as possibly diffuse (``diffuse_part``). Only the materials given are changed;
-the shared group is (re)built once per call (``nodes.ensure_node_group``).
+Materials without a readable diffuse part are left alone and reported as skipped, with the
+reason (``diffuse_weight.diffuse_leaves``): a surface made only of shaders without one, a
+surface from a node group or another shader whose diffuse colour cannot be read, an
+unconnected Surface. Only the materials given are changed (and, in "KEEP_BSDF", the worlds
+showing them); the shared group is (re)built once per call (``nodes.ensure_node_group``).
 Every material is checked before it is changed; an error while changing it is rolled back.
 """
 

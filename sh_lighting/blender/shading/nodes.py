@@ -35,6 +35,7 @@ import bpy
 
 from ...core.irradiance import C1, C2, C3, C4, C5
 from ...core.sh import COEFFICIENT_NAMES
+from .. import scene_data
 from ..scene_data import GAIN_NAMES, PROPERTY_NAMES
 
 GROUP_NAME = "SH Irradiance"
@@ -99,9 +100,7 @@ def ensure_node_group():
     if hasattr(tree, "description"):  # NodeTree.description is not in every 4.x
         tree.description = DESCRIPTION
     for scene in bpy.data.scenes:
-        missing = [g for n, g in zip(PROPERTY_NAMES, GAIN_NAMES) if n in scene and g not in scene]
-        for name in missing:
-            scene[name] = 1.0
+        scene_data.add_missing_gains(scene)
     return tree
 
 

@@ -1,0 +1,228 @@
+"""`python -m benchmarks.bench_real_scene`: every Apply mode in a real scene (issue 21 item 3).
+
+A scene of our own: a 40 m ground plane, a box and a Suzanne (diffuse, base 0.8, roughness
+0.5), a glossy sphere (metallic 0.8, roughness 0.5), a camera looking down at them, under two
+bundled HDRIs (Blender's studiolights/world): sunrise.exr (a low sun: long shadows) and
+forest.exr (soft, overcast-like light). Each method in ``METHODS`` renders the scene; each
+render is compared with Cycles path tracing of the original world (``REFERENCE_SAMPLES``):
+
+* error: relative RMSE (RMS of the pixel difference over the mean of the reference) over the
+  diffuse objects' pixels, the glossy sphere's, and the shadowed ground's (ground pixels
+  below half the ground's median brightness in the reference: the occluders' shadows);
+* brightness: mean over the diffuse objects ÷ the reference's;
+* time: the render's wall time (the machine is shared: see the load average).
+
+The section between the markers in benchmarks/REPORT.md is replaced (appended the first time).
+``METHODS`` is a list: another mode (e.g. the transfer) is one more entry.
+"""
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import bpy
+import numpy as np
+from mathutils import Vector
+
+from sh_lighting import api
+from sh_lighting.blender import compat
+from sh_lighting.blender.shading import materials
+from sh_lighting.blender.world.images import load_image_pixels
+
+from .render_bench import _settings
+
+HERE = Path(__file__).resolve().parent
+BEGIN, END = "<!-- bench_real_scene -->", "<!-- /bench_real_scene -->"
+HDRIS = ("sunrise", "forest")
+REFERENCE_SAMPLES = 512
+EEVEE_SAMPLES = 16
+
+
+def _principled(name, **inputs):
+    material = bpy.data.materials.new(name)
+    bsdf = compat.ensure_node_tree(material).nodes["Principled BSDF"]
+    for key, value in inputs.items():
+        bsdf.inputs[key.replace("_", " ")].default_value = value
+    return material
+
+
+def build_scene(hdri_path, size):
+    """The scene (module docstring) in a fresh Blender; returns {role: [objects]}."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    world = bpy.data.worlds.new("HDRI")
+    tree = compat.ensure_node_tree(world)
+    environment = tree.nodes.new("ShaderNodeTexEnvironment")
+    environment.image = bpy.data.images.load(str(hdri_path))
+    tree.links.new(environment.outputs["Color"], tree.nodes["Background"].inputs["Color"])
+    scene.world = world
+    diffuse = _principled("Diffuse", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=0.5)
+    glossy = _principled("Glossy", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=0.5,
+                         Metallic=0.8)
+    roles = {"ground": [], "diffuse": [], "glossy": []}
+    bpy.ops.mesh.primitive_plane_add(size=40.0)
+    roles["ground"].append(bpy.context.object)
+    bpy.ops.mesh.primitive_cube_add(size=1.2, location=(-1.6, 0.4, 0.6))
+    roles["diffuse"].append(bpy.context.object)
+    bpy.ops.mesh.primitive_monkey_add(size=1.4, location=(0.2, 0.0, 0.75))
+    bpy.ops.object.shade_smooth()
+    roles["diffuse"].append(bpy.context.object)
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.7, segments=48, ring_count=24,
+                                         location=(1.9, 0.2, 0.7))
+    bpy.ops.object.shade_smooth()
+    roles["glossy"].append(bpy.context.object)
+    for role, objects in roles.items():
+        for obj in objects:
+            obj.data.materials.append(glossy if role == "glossy" else diffuse)
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    scene.collection.objects.link(camera)
+    camera.location = (0.0, -7.5, 3.6)
+    camera.rotation_euler = (Vector((0.2, 0.0, 0.5)) - camera.location).to_track_quat(
+        "-Z", "Y").to_euler()
+    camera.data.lens = 35.0
+    scene.camera = camera
+    _settings(scene, size, "CYCLES")
+    scene.render.film_transparent = False
+    scene.cycles.max_bounces = 4
+    scene.eevee.taa_render_samples = EEVEE_SAMPLES
+    api.compute_from_world(scene)
+    return roles
+
+
+def _render(scene, path, engine, samples=1, seed=0):
+    scene.render.engine = engine
+    scene.cycles.samples = samples
+    scene.cycles.seed = seed
+    scene.render.filepath = str(path)
+    start = time.perf_counter()
+    bpy.ops.render.render(write_still=True)
+    return time.perf_counter() - start, load_image_pixels(path)[..., :3].astype(np.float64)
+
+
+def id_masks(scene, roles, folder):
+    """{role: bool (H, W)} from one Cycles render of each role in an emission colour."""
+    saved = {obj.name: list(obj.data.materials) for objs in roles.values() for obj in objs}
+    world = scene.world
+    scene.world = None
+    colours = {"ground": (1, 0, 0), "diffuse": (0, 1, 0), "glossy": (0, 0, 1)}
+    for role, objects in roles.items():
+        material = bpy.data.materials.new(f"ID {role}")
+        tree = compat.ensure_node_tree(material)
+        emission = tree.nodes.new("ShaderNodeEmission")
+        emission.inputs["Color"].default_value = (*colours[role], 1.0)
+        tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+        for obj in objects:
+            obj.data.materials[0] = material
+    _, image = _render(scene, Path(folder) / "ids.exr", "CYCLES")
+    for objects in roles.values():
+        for obj in objects:
+            obj.data.materials[0] = saved[obj.name][0]
+    scene.world = world
+    return {role: image[..., index] > 0.999 for index, role in enumerate(colours)}
+
+
+# Each method: (name, engine, Apply mode or None, samples, Emission Sampling forced or None).
+METHODS = [
+    ("Cycles, world, 16 spp (no add-on)", "CYCLES", None, 16, None),
+    ("Cycles, world, 64 spp (no add-on)", "CYCLES", None, 64, None),
+    ("EEVEE, world (no add-on)", "EEVEE", None, EEVEE_SAMPLES, None),
+    ("Cycles Keep BSDF, 16 spp (Emission Sampling None)", "CYCLES", "KEEP_BSDF", 16, None),
+    ("Cycles Keep BSDF, 16 spp (Emission Sampling Auto)", "CYCLES", "KEEP_BSDF", 16, "AUTO"),
+    ("Cycles Keep BSDF, 64 spp", "CYCLES", "KEEP_BSDF", 64, None),
+    ("EEVEE Keep BSDF (default)", "EEVEE", "KEEP_BSDF", EEVEE_SAMPLES, None),
+    ("Cycles Emission Only, 1 spp", "CYCLES", "EMISSION", 1, None),
+    ("EEVEE Emission Only", "EEVEE", "EMISSION", EEVEE_SAMPLES, None),
+]
+
+
+def _rrmse(image, reference, mask):
+    if not mask.any():
+        return float("nan")
+    difference = image[mask] - reference[mask]
+    return float(np.sqrt(np.mean(difference ** 2)) / reference[mask].mean())
+
+
+def measure(hdri, size, folder):
+    path = Path(bpy.utils.system_resource("DATAFILES", path="studiolights/world")) / f"{hdri}.exr"
+    roles = build_scene(path, size)
+    scene = bpy.context.scene
+    masks = id_masks(scene, roles, folder)
+    _, reference = _render(scene, Path(folder) / f"{hdri}_ref.exr", "CYCLES",
+                           REFERENCE_SAMPLES, seed=7)
+    ground = reference.mean(axis=2)
+    lit = ground[masks["ground"]]
+    masks["shadowed"] = masks["ground"] & (ground < 0.5 * np.median(lit))
+    all_mats = materials.materials_of(scene.objects)
+    rows = []
+    for index, (name, engine, mode, samples, sampling) in enumerate(METHODS):
+        if mode is not None:
+            materials.apply_to_materials(all_mats, scene, mode)
+            if sampling is not None:
+                for material in all_mats:
+                    material.cycles.emission_sampling = sampling
+        engine_id = compat.eevee_engine_id() if engine == "EEVEE" else "CYCLES"
+        seconds, image = _render(scene, Path(folder) / f"{hdri}_{index}.exr", engine_id,
+                                 samples, seed=index)
+        if mode is not None:
+            materials.remove_from_materials(all_mats)
+        diffuse = masks["diffuse"] | masks["ground"]
+        rows.append({
+            "method": name, "diffuse": _rrmse(image, reference, diffuse),
+            "glossy": _rrmse(image, reference, masks["glossy"]),
+            "shadowed": _rrmse(image, reference, masks["shadowed"]),
+            "bright": float(image[diffuse].mean() / reference[diffuse].mean()),
+            "seconds": seconds,
+        })
+        print(f"{hdri}: {name}: {rows[-1]}", flush=True)
+    return rows
+
+
+def section(results, size, load, elapsed):
+    lines = [BEGIN, "", "## Real scene: every Apply mode against path tracing (issue 21)", "",
+             f"`python -m benchmarks.bench_real_scene` ({size}×{size} px, reference: Cycles "
+             f"path tracing of the world at {REFERENCE_SAMPLES} spp, max 4 bounces; load "
+             f"average {load}; {elapsed:.0f} s in all). Ground 40 m, a box and a Suzanne "
+             "(base 0.8, roughness 0.5), a sphere of metallic 0.8, roughness 0.5. Error: "
+             "relative RMSE over the diffuse objects and ground, the glossy sphere, and the "
+             "shadowed ground (below half the ground's median in the reference); bright: mean "
+             "over the diffuse pixels ÷ the reference's.", ""]
+    for hdri, rows in results.items():
+        lines += [f"**{hdri}.exr**", "",
+                  "| method | diffuse err | glossy err | shadowed err | bright | time |",
+                  "|---|---|---|---|---|---|"]
+        for r in rows:
+            lines.append(f"| {r['method']} | {r['diffuse']:.1%} | {r['glossy']:.1%} | "
+                         f"{r['shadowed']:.1%} | {r['bright']:.3f} | {r['seconds']:.1f} s |")
+        lines.append("")
+    lines.append(END)
+    return "\n".join(lines)
+
+
+def write(report, text):
+    old = report.read_text() if report.exists() else ""
+    if BEGIN in old and END in old:
+        head, rest = old.split(BEGIN, 1)
+        new = head + text + rest.split(END, 1)[1]
+    else:
+        new = old.rstrip() + "\n\n" + text + "\n"
+    report.write_text(new)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=64)
+    parser.add_argument("--out", type=Path, default=HERE / "REPORT.md")
+    args = parser.parse_args(argv)
+    start = time.perf_counter()
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    with tempfile.TemporaryDirectory() as folder:
+        results = {hdri: measure(hdri, args.size, folder) for hdri in HDRIS}
+    write(args.out, section(results, args.size, load, time.perf_counter() - start))
+    print(f"wrote the real-scene section of {args.out}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
