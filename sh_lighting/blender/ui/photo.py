@@ -9,7 +9,7 @@ stored coefficients' provenance ("PHOTO").
 import bpy
 
 from ...core.photo import DEFAULT_ALBEDO, DEFAULT_MARGIN, PRIORS
-from .. import photo
+from .. import photo, scene_data
 from .panels import sub_panels
 from .polls import scene_poll
 
@@ -195,7 +195,7 @@ def draw_image_menu(self, context):
 def draw_photo(layout, context):
     """The Match Photo button and where the current values came from, if a photo."""
     layout.operator(SHLIGHT_OT_match_photo.bl_idname, icon="IMAGE_DATA")
-    record = photo.scene_data.provenance(context.scene) if context.scene else {}
+    record = scene_data.provenance(context.scene) if context.scene else {}
     if record.get("source") == "PHOTO":
         layout.label(text=f"From {record.get('file', '?')}, residual "
                           f"{100.0 * float(record.get('residual', 0.0)):.1f} %", icon="INFO")
