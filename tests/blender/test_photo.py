@@ -162,6 +162,7 @@ def hostile_photos(folder):
     ("black", "black"),
     ("noise", "away from any diffuse ball"),
     ("missing", "does not exist"),
+    ("no camera", "no camera: set the scene's camera"),
 ])
 def test_hostile_input_one_line_and_nothing_changed(case, message, photos, addon, tmp_path):
     scene, _ = grey_ball_scene(photos["sh_world"])
@@ -176,6 +177,8 @@ def test_hostile_input_one_line_and_nothing_changed(case, message, photos, addon
         circle = (cx, cy, float(case[-1]))
     elif case == "missing":
         path = str(tmp_path / "nothing.png")
+    elif case == "no camera":
+        scene.camera = None
     else:
         path = paths[case]
     from sh_lighting.blender.ui.photo import SHLIGHT_OT_match_photo
