@@ -78,7 +78,7 @@ def test_operators_are_undoable(addon, cls):
 def test_settings_properties_are_described(addon):
     rna = bpy.types.Scene.bl_rna.properties["sh_lighting"].fixed_type
     names = {p.identifier for p in rna.properties} - {"rna_type", "name"}
-    assert names == {"apply_target", "use_capture_width", "capture_width"}  # no coefficients
+    assert names == {"apply_target", "apply_mode", "use_capture_width", "capture_width"}  # no coefficients
     for name in names:
         assert rna.properties[name].description, name
 
