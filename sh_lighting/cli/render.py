@@ -1,5 +1,6 @@
 """``render [BLEND] --output PATH``: frames rendered headless, each written atomically."""
 
+import os
 import time
 from pathlib import Path
 
@@ -32,6 +33,9 @@ def add_arguments(p, prog):
     p.add_argument("--engine", choices=("CYCLES", "EEVEE"),
                    help="render engine (default: the scene's)")
     p.add_argument("--samples", type=positive, metavar="N", help="render samples")
+    p.add_argument("--output-folder", metavar="DIR",
+                   help="refuse, before any render, frames that --output would put outside "
+                   "DIR ('..', a link): a farm job's output folder")
     p.add_argument("--skip-existing", action="store_true",
                    help="keep frames whose output file exists (a rerun resumes)")
     add_scene(p, "scene to render")
@@ -53,10 +57,15 @@ def run(args):
         )
     if not scene_data.has_coefficients(scene):
         say(f"warning: scene '{scene.name}' has no SH coefficients: it renders without them")
+    if args.output_folder is not None:
+        for frame in {frames[0], frames[-1]}:
+            check_inside(frame_target(scene, args.output, frame), args.output_folder, frame)
     start = time.perf_counter()
     for index, frame in enumerate(frames, start=1):
         t0 = time.perf_counter()
         target = frame_target(scene, args.output, frame)
+        if args.output_folder is not None:
+            check_inside(target, args.output_folder, frame)
         if args.skip_existing and target.exists():
             say(f"[{index}/{len(frames)}] frame {frame}: skipped ({target} exists)")
             continue
@@ -66,6 +75,16 @@ def run(args):
     say(f"Rendered {len(frames)} frame(s) with {scene.render.engine} in "
         f"{time.perf_counter() - start:.2f} s")
     return 0
+
+
+def check_inside(target, folder, frame):
+    """A CommandError unless ``target`` (links and '..' resolved) lies inside ``folder``."""
+    real, inside = os.path.realpath(target), os.path.realpath(folder)
+    if os.path.commonpath([real, inside]) != inside:
+        raise CommandError(
+            f"frame {frame} would be written to '{target}', which is outside --output-folder "
+            f"'{folder}': give an --output inside it (no '..')"
+        )
 
 
 def frame_range(args, scene):

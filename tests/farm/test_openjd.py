@@ -203,6 +203,22 @@ def test_render_bundle_every_task(tmp_path, blender_command):
     job.check_nothing_outside(before)  # the input .blend and preset unchanged
 
 
+def test_render_output_name_cannot_leave_the_output_folder(tmp_path, blender_command):
+    """Issue 20 item 22: OutputName=../escaped wrote its frames beside OutputFolder, exit 0."""
+    job, blend, preset = render_job(tmp_path, blender_command)
+    before = job.snapshot()
+    params = job.params(BlendFile=str(blend), PresetFile=str(preset),
+                        OutputFolder=str(job.out), Frames="1-1", FramesPerTask=1,
+                        OutputName="../escaped", ApplyMode="EMISSION")
+    status, blocks = job.run(params)
+    assert status != 0
+    (task,) = tasks(blocks).values()
+    assert task["exit"] == 1
+    (line,) = error_lines(task)
+    assert "is outside --output-folder" in line and str(job.out) in line, line
+    job.check_nothing_outside(before)
+
+
 def test_render_rerun_after_a_killed_task_completes_the_job(tmp_path, blender_command):
     job, blend, preset = render_job(tmp_path, blender_command)
     params = job.params(BlendFile=str(blend), PresetFile=str(preset),
