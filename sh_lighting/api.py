@@ -131,16 +131,19 @@ def split_sun(scene):
     return extract_lights(scene, count=1)
 
 
-def compute_from_world(scene, capture_width=None):
+def compute_from_world(scene, capture_width=None, nonfinite="raise"):
     """Project ``scene``'s world onto 9 SH coefficients and store them on the scene.
 
     Reads the Environment Texture image directly when the world is one, else renders a
     ``capture_width`` × ``capture_width/2`` equirectangular capture (default: the scene's
     override, else the add-on preferences, else 256). The result also becomes the Reset
-    values, and the scene records where it came from (``get_provenance``). Returns the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
+    values, and the scene records where it came from (``get_provenance``). ``nonfinite``
+    "zero": NaN/Inf texels of the world image count as black ("raise" refuses them). Returns
+    the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
     user-facing message, leaving the scene unchanged, when the world cannot be read.
     """
-    return _compute.compute_and_store(scene, capture_width)[0]  # also deletes extracted lights
+    # also deletes extracted lights
+    return _compute.compute_and_store(scene, capture_width, nonfinite=nonfinite)[0]
 
 
 def coefficients_from_photo(scene, path, circle, **options):

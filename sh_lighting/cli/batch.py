@@ -51,6 +51,7 @@ def run(args):
     if not 1 <= first <= last <= len(files):
         raise CommandError(f"--files {first}-{last}: '{folder}' holds files 1-{len(files)} "
                            f"matching {args.pattern}")
+    create_folder(out_dir)  # only now: a batch refused above leaves no folder behind
     if args.files is None:
         remove_batch_leftovers(out_dir)
     else:  # one task of a farm job: other tasks may be writing their presets right now
@@ -104,13 +105,21 @@ def hdri_files(folder, patterns):
 
 
 def batch_folders(args):
-    """(HDRI folder, output folder created if need be), or a CommandError saying why not."""
+    """(HDRI folder, output folder), or a CommandError saying why they cannot be used (the
+    output folder is created later, by ``create_folder``, once the batch is not refused)."""
     folder, out_dir = Path(args.hdri_dir), Path(args.out_dir)
     if not folder.is_dir():
         what = "is a file, not a folder" if folder.exists() else "does not exist"
         raise CommandError(f"HDRI folder '{folder}' {what}: give the folder of the HDRIs")
     if out_dir.exists() and not out_dir.is_dir():
         raise CommandError(f"OUT_DIR '{out_dir}' is a file, not a folder: give a folder")
+    if file_in_way(out_dir):
+        raise CommandError(f"cannot create OUT_DIR '{out_dir}': a file is in the way")
+    return folder, out_dir
+
+
+def create_folder(out_dir):
+    """Create ``out_dir`` and its parents, or a CommandError saying why not."""
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as error:
@@ -118,7 +127,6 @@ def batch_folders(args):
         raise CommandError(
             f"cannot create OUT_DIR '{out_dir}': {error.strerror}{in_way}"
         ) from None
-    return folder, out_dir
 
 
 def remove_batch_leftovers(out_dir):

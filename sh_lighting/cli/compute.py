@@ -129,9 +129,11 @@ def _world(args):
     source = open_blend(args.input)
     scene = pick_scene(args.scene)
     try:
-        coeffs = api.compute_from_world(scene, capture_width=args.capture_width)
-    except ValueError as error:
-        raise CommandError(f"{source}: {error}") from None
+        coeffs = api.compute_from_world(scene, capture_width=args.capture_width,
+                                        nonfinite=args.nonfinite)
+    except ValueError as error:  # the API's advice, in this command's words
+        message = str(error).replace("pass nonfinite='zero'", "pass --nonfinite zero")
+        raise CommandError(f"{source}: {message}") from None
     metadata = preset_io.scene_metadata(scene)
     metadata["name"] = source.stem
     origin = metadata.get("source")

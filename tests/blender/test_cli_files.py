@@ -409,3 +409,38 @@ def test_gltf_export_of_a_map_one_texel_wide_lights_the_whole_cube(tmp_path, hei
         # RGBD's 8-bit steps: within 3 % of the dim channel (0.2), 0.6 % of the others
         assert_allclose(faces.reshape(-1, 3).min(axis=0), SKY, rtol=0.03, err_msg=f"{level}")
         assert_allclose(faces.reshape(-1, 3).max(axis=0), SKY, rtol=0.03, err_msg=f"{level}")
+
+
+@pytest.mark.parametrize("refusal", [
+    ("--pattern", "*.png"),  # no file matches
+    ("--expect-files", "5"),  # the job was split for another folder
+    ("--pattern", ","),  # no pattern at all
+    ("--files", "3-4"),  # beyond the folder
+])
+def test_a_batch_refused_before_any_work_creates_no_folder(tmp_path, refusal):
+    """Issue 20 item 24: OUT_DIR and its parents were created before the refusal."""
+    hdris = tmp_path / "hdris"
+    hdris.mkdir()
+    write_exr(hdris / "a.exr", constant_pixels((1.0, 1.0, 1.0)))
+    out = tmp_path / "new" / "deeper" / "presets"
+    one_error_line(run("batch", hdris, out, *refusal))
+    assert not (tmp_path / "new").exists()
+
+
+def test_compute_of_a_blend_takes_nonfinite_zero_and_names_the_option(tmp_path):
+    """Issue 20 item 21: --nonfinite was ignored for a .blend and the error said "pass
+    nonfinite='zero'", which neither the command line nor the API accepted."""
+    from cli_runs import build_blend
+
+    pixels = constant_pixels(SKY)
+    pixels[2, 3, 1] = np.nan
+    blend = build_blend(tmp_path / "nan.blend", write_exr(tmp_path / "nan.exr", pixels))
+    line = one_error_line(run("compute", blend))
+    assert "1 non-finite (NaN or Inf) texels at (row 2, column 3)" in line
+    assert "pass --nonfinite zero to treat those texels as black" in line
+    assert "nonfinite='zero'" not in line
+    result = run("compute", blend, "--nonfinite", "zero", "--out", tmp_path / "nan.json")
+    assert result.returncode == 0, result.stderr
+    coeffs = read_preset(tmp_path / "nan.json")[0]
+    assert 0.9 * EXACT[0, 1] < coeffs[0, 1] < EXACT[0, 1]  # one texel of 128 black
+    assert_allclose(coeffs[0, [0, 2]], EXACT[0, [0, 2]], rtol=1e-6)

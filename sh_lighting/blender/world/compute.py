@@ -46,7 +46,7 @@ def world_provenance(info):
 REPORT_ERROR_NORMALS = 64
 
 
-def compute_and_store(scene, capture_width=None, error_normals=0):
+def compute_and_store(scene, capture_width=None, error_normals=0, nonfinite="raise"):
     """Compute from World: ``world.world_coefficients`` stored on ``scene`` (``scene_data.store``,
     source "WORLD": they are also the Reset values), and the lights Extract Lights made deleted
     (``design.lights.remove_lights``: the whole world is in the SH again).
@@ -62,7 +62,7 @@ def compute_and_store(scene, capture_width=None, error_normals=0):
             getattr(scene, "sh_lighting", None), preferences.addon_preferences()
         )
     coeffs, info = world.world_coefficients(scene, capture_width=_whole(capture_width),
-                                            error_normals=error_normals)
+                                            error_normals=error_normals, nonfinite=nonfinite)
     stored = scene_data.store(scene, coeffs, world_provenance(info))
     lights.remove_lights(scene)  # the whole world is in the SH again: no extracted light
     return stored, info

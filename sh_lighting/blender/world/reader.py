@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import bpy
 
+from ...core.equirect import zero_nonfinite
 from ...core.mirror_ball import project_mirror_ball
 from ...core.projection import project_equirect
 from ...core.irradiance import error_estimate
@@ -389,21 +390,27 @@ def _error(pixels, coeffs, count):
     return None if estimate is None else (estimate["mean"], estimate["max"])
 
 
-def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0):
+def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0,
+                       nonfinite="raise"):
     """(9, 3) float64 L_lm of ``scene``'s world as Cycles renders it, and a ``WorldInfo``.
 
     ``read_world`` decides: an image is projected (``core``), anything else is captured by
     Cycles at ``capture_width`` × ``capture_width``/2 at the scene's current frame.
     ``error_normals`` > 0 also measures the 9-term error against the world's brute-force
     irradiance at that many normals (``WorldInfo.error``, ``irradiance.error_estimate``; not
-    for mirror-ball images), which costs that many passes over a map at most about 512 wide. Raises WorldError (a ValueError) when the world
+    for mirror-ball images), which costs that many passes over a map at most about 512 wide.
+    ``nonfinite`` "zero": NaN/Inf texels of a world image count as black. Raises WorldError (a ValueError) when the world
     cannot give any lighting.
     """
+    if nonfinite not in ("raise", "zero"):
+        raise ValueError(f'nonfinite must be "raise" or "zero", got {nonfinite!r}')
     start = time.perf_counter()
     source = read_world(scene, depsgraph)
     world = scene.world
     if isinstance(source, ImageSource):
         pixels = source.pixels()
+        if nonfinite == "zero":  # NaN/Inf texels black, in the projection and the estimate
+            pixels = zero_nonfinite(pixels)
         own = _project_image(source, pixels)
         # The Mapping node turns the lookup direction by R: the lighting is the image turned by
         # Rᵀ, and Strength scales it. Neither changes the error as a fraction of the light, so
