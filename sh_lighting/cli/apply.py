@@ -39,7 +39,7 @@ def run(args):
         blend = input_file(args.blend, ".blend file", "give the .blend file to change")
     else:
         blend = open_file()
-    preset, coeffs = read_preset_argument(args.preset, blend)
+    preset, _ = read_preset_argument(args.preset, blend)  # refused before Blender opens
     out = blend if args.in_place else blend_relative(args.out, blend, "--out")
     if not args.in_place:
         refuse_inputs(out, "--out", {".blend file": blend},
@@ -48,24 +48,25 @@ def run(args):
         check_new_file(out, args.overwrite, what="--out")
     if args.in_place:
         with changed_alone(blend, ".blend file"):
-            return apply_and_save(args, preset, coeffs, out)
-    return apply_and_save(args, preset, coeffs, out)
+            return apply_and_save(args, preset, out)
+    return apply_and_save(args, preset, out)
 
 
-def apply_and_save(args, preset, coeffs, out):
+def apply_and_save(args, preset, out):
     """Open the .blend, set the preset, apply the group, save to ``out``."""
     from .. import api
     from ..blender import scene_data
     from ..blender.presets import files as preset_io
     from ..blender.shading import materials
+    from ..formats.presets import PresetError
 
     open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
     scene = pick_scene(args.scene)
     objects = objects_to_apply(scene, args.objects)
-    provenance = preset_io.preset_provenance(preset, {})
-    try:
-        api.set_coefficients(scene, preset_io.from_preset_space(coeffs), provenance,
-                             args.animation.upper())
+    try:  # what the UI's Load and Import do (the preset's name recorded from its metadata)
+        preset_io.import_preset(scene, preset, args.animation.upper())
+    except (PresetError, OSError) as error:
+        raise CommandError(str(error)) from None
     except api.AnimatedError as error:
         raise CommandError(str(error).replace("(animation='KEY', ", "(")
                            .replace("(animation='CLEAR', ", "(")) from None

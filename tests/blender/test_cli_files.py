@@ -444,3 +444,49 @@ def test_compute_of_a_blend_takes_nonfinite_zero_and_names_the_option(tmp_path):
     coeffs = read_preset(tmp_path / "nan.json")[0]
     assert 0.9 * EXACT[0, 1] < coeffs[0, 1] < EXACT[0, 1]  # one texel of 128 black
     assert_allclose(coeffs[0, [0, 2]], EXACT[0, [0, 2]], rtol=1e-6)
+
+
+def test_a_truncated_exr_is_one_error_line_and_the_batch_goes_on(tmp_path):
+    """Issue 20 item 16: bpy 5.0.1's EXR reader crashed the process (SIGSEGV) on an EXR cut
+    short, and batch died after its first file with no summary."""
+    hdris, out = tmp_path / "hdris", tmp_path / "presets"
+    hdris.mkdir()
+    full = Path(write_exr(tmp_path / "full.exr", constant_pixels(SKY, height=64, width=128)))
+    data = full.read_bytes()
+    (hdris / "a_cut.exr").write_bytes(data[:int(len(data) * 0.45)])  # inside its chunks
+    write_exr(hdris / "b.exr", constant_pixels(SKY))
+    result = run("batch", hdris, out)
+    assert result.returncode == 1, (result.returncode, result.stdout, result.stderr)
+    errors = [line for line in result.stderr.splitlines() if line]
+    assert len(errors) == 2, result.stderr  # the file's line, then the total's
+    assert "a_cut.exr" in errors[0] and "is damaged (chunk" in errors[0]
+    assert "probably truncated" in errors[0]
+    assert "[2/2] b.exr: ok" in result.stdout
+    assert "2 file(s): 1 ok, 0 skipped, 1 failed" in result.stdout
+    assert sorted(p.name for p in out.iterdir()) == ["b.json"]
+    line = one_error_line(run("compute", hdris / "a_cut.exr"))
+    assert str(hdris / "a_cut.exr") in line and "is damaged" in line
+
+
+def test_apply_records_the_preset_as_the_ui_does(inputs, tmp_path):
+    """The review: cli apply rebuilt import_preset without the preset's metadata, so the
+    recorded name was the file's stem ("noon") where the UI records "Forest Noon"."""
+    from sh_lighting import api
+
+    preset = write_preset(tmp_path / "noon.json", EXACT, {"name": "Forest Noon"})
+    out = tmp_path / "lit.blend"
+    result = run("apply", preset, inputs["blend"], "--out", out)
+    assert result.returncode == 0, result.stderr
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    try:
+        cli_record = api.get_provenance(bpy.context.scene)
+        bpy.ops.wm.open_mainfile(filepath=str(inputs["blend"]))
+        from sh_lighting.blender.presets import files as preset_io
+
+        preset_io.import_preset(bpy.context.scene, preset)  # what Load and Import call
+        ui_record = api.get_provenance(bpy.context.scene)
+    finally:
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+    assert cli_record["preset"] == "Forest Noon"
+    assert {k: cli_record[k] for k in ("source", "preset", "path")} == {
+        k: ui_record[k] for k in ("source", "preset", "path")}

@@ -302,14 +302,17 @@ def read_preset_file(path):
     return read_preset(file_path(path))
 
 
-def import_preset(scene, path):
+def import_preset(scene, path, animation=scene_data.DEFAULT_ANIMATION):
     """Set ``scene``'s coefficients from our preset JSON at ``path``; returns them (9, 3).
 
     Reads and checks the whole file first: on PresetError / OSError the scene is unchanged.
-    The values do not become the Reset values (module docstring).
+    The values do not become the Reset values (module docstring). ``animation``: what
+    ``scene_data.store`` does when a written property is animated. The Load and Import
+    operators and the command line's ``apply`` all read a preset through here.
     """
     coeffs, metadata = read_preset_file(path)
-    return scene_data.store(scene, from_preset_space(coeffs), preset_provenance(path, metadata))
+    return scene_data.store(scene, from_preset_space(coeffs), preset_provenance(path, metadata),
+                            animation)
 
 
 def preset_provenance(path, metadata):

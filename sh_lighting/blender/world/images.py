@@ -30,6 +30,7 @@ import bpy
 import numpy as np
 
 from ...core.colour import BYTE_SPACES, byte_decoding, decode_bytes
+from ...formats import exr
 from ..compat import working_space
 
 
@@ -173,6 +174,8 @@ def load_image_pixels(path):
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise ValueError(f"image file '{path}' does not exist: check the path")
+    if exr.is_exr(path):
+        exr.check_exr(path)  # a truncated EXR crashes Blender's reader (SIGSEGV)
     try:
         image = bpy.data.images.load(path, check_existing=False)
     except RuntimeError as error:
