@@ -110,8 +110,11 @@ run() {
     cp "$zip" "$host/extension.zip"
     cp "$script" "$host/script.py"
     local status=0
+    # The script's own settings (SH_GUI_*) pass into the root; nothing else of this shell does.
+    local passed=()
+    mapfile -t passed < <(env | grep -E '^SH_GUI_[A-Z_]+=' || true)
     chroot "$root" /usr/bin/env -i PATH=/usr/bin:/bin HOME="$job/home" LANG=C.UTF-8 \
-        JOB="$job" SIZE="$size" LIMIT="${BLENDER_GUI_TIMEOUT:-300}" bash -c '
+        "${passed[@]}" JOB="$job" SIZE="$size" LIMIT="${BLENDER_GUI_TIMEOUT:-300}" bash -c '
         blender -b --command extension install-file -r user_default -e "$JOB/extension.zip" \
             >"$JOB/install.log" 2>&1 || { cat "$JOB/install.log" >&2; exit 3; }
         # Xvfb picks a free display itself and writes its number to fd 3.

@@ -834,8 +834,14 @@ def node_editor():
     group = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup")
     output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
     link = next(lk for lk in tree.links if lk.to_node == output)
+    # Emission Only: the group feeds the output; Keep BSDF: an Add Shader of the BSDF and it
+    feeder = link.from_node
+    if feeder.bl_idname == "ShaderNodeAddShader":
+        feeds = any(lk.from_node == group and lk.to_node == feeder for lk in tree.links)
+    else:
+        feeds = feeder == group
     check("node group left of the Material Output, forward wire, full name",
-          group.location.x + group.width < output.location.x and link.from_node == group
+          group.location.x + group.width < output.location.x and feeds
           and group.width >= 180, group=[group.location.x, group.location.y, group.width],
           output=[output.location.x, output.location.y])
     v3d.ui_type = "VIEW_3D"
@@ -876,20 +882,23 @@ def preferences():
 
 
 TARGETS = {  # (dx, dy) inside the sidebar (291 px wide), from the calibration pictures
+    # Below Apply To, the Mode row and one status line under Apply / Remove (+26 px each, read
+    # off a 4.3 calibration picture of the empty panel: Compute 48, Apply To 76, Mode 102,
+    # Apply 128, the line 154, Coefficients 186).
     "compute_empty": (95, 48),
     "compute": (95, 201),
     "reset": (212, 201),
-    "apply": (75, 255),
-    "remove": (212, 255),
-    "row0": (60, 318),
+    "apply": (75, 281),
+    "remove": (212, 281),
+    "row0": (60, 370),
     "row_step": 20.9,
     "name_x": 60,
     "strength_x": 196,
     "channel_g": 44,
-    "design_header": (60, 518),
-    "exposure": (75, 569),
-    "basis_header": (60, 544),
-    "presets": (222, 16),
+    "design_header": (60, 570),
+    "exposure": (75, 621),
+    "basis_header": (60, 596),
+"presets": (222, 16),
     "preset_entry": (220, 139),  # Grace Cathedral, the 5th shipped preset
     "popup_field": (221, 51),  # the Stops field of the Exposure popup, from the mouse
     "popover_x": 220,
