@@ -164,3 +164,23 @@ def test_render_result_is_refused_with_advice():
     with pytest.raises(ValueError, match="save it") as info:
         image_pixels(result)
     assert "Render Result" in str(info.value)
+
+
+def test_8bit_decoding_in_row_blocks_is_the_whole_image_decoding(tmp_path, monkeypatch):
+    """linear_pixels decodes 8-bit images DECODE_ROWS at a time (no full-size temporaries):
+    blocks that split the rows unevenly give the same values, top row first."""
+    from sh_lighting.blender.world import images
+    from sh_lighting.core.colour import srgb_to_linear
+
+    rows = [[((17 * r + 3 * c) % 256, (5 * r) % 256, 255 - c) for c in range(6)]
+            for r in range(7)]
+    path = tmp_path / "rows.png"
+    path.write_bytes(png_bytes(rows))
+    image = bpy.data.images.load(str(path))
+    monkeypatch.setattr(images, "DECODE_ROWS", 3)
+    blocked = images.linear_pixels(image)
+    monkeypatch.setattr(images, "DECODE_ROWS", 1 << 20)
+    whole = images.linear_pixels(image)
+    bpy.data.images.remove(image)
+    np.testing.assert_array_equal(blocked, whole)
+    assert blocked[6, 0, 0] == pytest.approx(srgb_to_linear((17 * 6 % 256) / 255.0), abs=2e-3)

@@ -34,6 +34,11 @@ from ...formats import exr
 from ..compat import working_space
 
 
+# Rows of an 8-bit image decoded at a time (at 8192×4096 the whole-image temporaries were
+# 1.5 GB traced; benchmarks/REPORT.md, "Sizes").
+DECODE_ROWS = 64
+
+
 class DecodeError(ValueError):
     """Blender renders the image's texels otherwise than ``linear_pixels`` can reproduce."""
 
@@ -157,9 +162,12 @@ def linear_pixels(image):
     settings = image.colorspace_settings
     if image.is_float or settings.is_data:
         return pixels
-    codes = (pixels[..., :3] * 255.0 + 0.5).astype(np.uint8)  # exact: pixels are byte / 255
+    decoding = byte_decoding(settings.name, working_space())
     decoded = np.empty(pixels.shape, dtype=np.float32)
-    decoded[..., :3] = decode_bytes(codes, *byte_decoding(settings.name, working_space()))
+    for r0 in range(0, pixels.shape[0], DECODE_ROWS):  # row blocks: no full-size temporaries
+        block = pixels[r0 : r0 + DECODE_ROWS]
+        codes = (block[..., :3] * 255.0 + 0.5).astype(np.uint8)  # exact: pixels are byte / 255
+        decoded[r0 : r0 + DECODE_ROWS, :, :3] = decode_bytes(codes, *decoding)
     decoded[..., 3] = pixels[..., 3]
     return decoded
 
