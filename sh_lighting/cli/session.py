@@ -1,5 +1,10 @@
 """The .blend a command works on: opened (or the one Blender has open), its scene, saved."""
 
+import os
+import re
+import sys
+import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..formats.atomic import atomic_destination
@@ -30,11 +35,46 @@ def open_blend(path, load_ui=False):
             )
         return Path(bpy.data.filepath)
     path = input_file(path, ".blend file", "give a .blend file")
-    try:
-        bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=load_ui)
-    except RuntimeError as error:
-        raise CommandError(f"Blender could not open '{path}': {error}") from None
+    with output_captured(1) as printed:  # Blender prints its reason too: ours is the one line
+        try:
+            bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=load_ui)
+        except RuntimeError as error:
+            raise CommandError(
+                f"Blender could not open '{path}': {blender_reason(error)}") from None
+        finally:
+            text = printed()
+    if text:  # opened: Blender's own lines ("Read blend: ...") as it printed them
+        sys.stdout.write(text)
+        sys.stdout.flush()
     return path
+
+
+def blender_reason(error):
+    """The reason in a RuntimeError Blender raised, as one line: its first non-empty line,
+    without Blender's "Error: " and 'Loading "<path>" failed: ' (Blender 4.3 and 5.0 add them
+    to a report that may run over several lines)."""
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    reason = lines[0] if lines else "no reason given"
+    reason = re.sub(r"^Error:\s*", "", reason)
+    return re.sub(r'^Loading ".*?" failed:\s*', "", reason)
+
+
+@contextmanager
+def output_captured(fd):
+    """What is written to file descriptor ``fd`` (1: stdout, 2: stderr, C libraries included)
+    during the block, kept in a temporary file instead; yields a function returning it."""
+    stream = sys.stdout if fd == 1 else sys.stderr
+    stream.flush()
+    saved = os.dup(fd)
+    with tempfile.TemporaryFile() as capture:
+        os.dup2(capture.fileno(), fd)
+        try:
+            yield lambda: (stream.flush(), capture.seek(0),
+                           capture.read().decode("utf-8", "replace"))[2]
+        finally:
+            stream.flush()
+            os.dup2(saved, fd)
+            os.close(saved)
 
 
 def pick_scene(name):

@@ -213,10 +213,14 @@ def write_text_atomic(path, text, overwrite=False, what="file", hint="pass overw
         except BaseException:
             os.close(fd)
             raise
-        with stream:
-            stream.write(data)
-            stream.flush()
-            os.fsync(stream.fileno())
+        try:
+            with stream:
+                stream.write(data)
+                stream.flush()
+                os.fsync(stream.fileno())
+        except OSError as error:  # a full disk, a quota: say which file could not be written
+            raise OSError(error.errno, f"cannot write {what} '{path}': "
+                          f"{error.strerror or error}") from None
         _move_into_place(temporary, path, real, overwrite, what, hint)
     except BaseException:
         _discard(temporary)

@@ -490,3 +490,17 @@ def test_apply_records_the_preset_as_the_ui_does(inputs, tmp_path):
     assert cli_record["preset"] == "Forest Noon"
     assert {k: cli_record[k] for k in ("source", "preset", "path")} == {
         k: ui_record[k] for k in ("source", "preset", "path")}
+
+
+def test_a_blend_blender_cannot_open_is_said_once_in_one_line(tmp_path):
+    """Issue 20 item 23: our line embedded Blender's whole message ("Error: Loading ... failed:
+    ...") and a blank line, and Blender printed the same message again."""
+    bad = tmp_path / "bad.blend"
+    bad.write_bytes(b"BLENDER-v600RENDH" + bytes(range(256)) * 8)
+    result = run("compute", bad)
+    line = one_error_line(result)
+    assert result.stderr == line + "\n"  # no blank line after it
+    assert line.startswith(f"sh_lighting: error: Blender could not open '{bad}': ")
+    assert "Error:" not in line.removeprefix("sh_lighting: error:") and "Loading" not in line
+    assert "Missing DNA block" in line or "Failed to read" in line
+    assert "failed" not in result.stdout.lower(), result.stdout  # said once, by us

@@ -212,3 +212,18 @@ def _error_of(function, *args):
     except Exception as error:  # noqa: BLE001 - the test inspects it
         return error
     return None
+
+
+def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
+    """Issue 20 item 23: "[Errno 28] No space left on device", without the path."""
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    target = tmp_path / "sky.json"
+    monkeypatch.setattr(os, "fsync", full)
+    with pytest.raises(OSError) as caught:
+        atomic.write_text_atomic(target, "{}", what="preset file")
+    assert caught.value.errno == errno.ENOSPC
+    assert str(caught.value) == (f"[Errno 28] cannot write preset file '{target}': "
+                                 "No space left on device")
+    assert list(tmp_path.iterdir()) == []  # nothing half written left behind
