@@ -44,6 +44,11 @@ def add_arguments(p, prog):
                    "scene's setting, else 256)")
     add_scene(p)
     add_nonfinite(p)
+    p.add_argument("--projection", choices=("equirect", "mirror_ball"),
+                   help="how an HDRI image maps to directions: equirect (the default: a "
+                   "latitude-longitude map, twice as wide as high) or mirror_ball (a "
+                   "chrome-ball photo filling the image); the line after the command says "
+                   "which was used")
     p.add_argument(
         "--lights", type=int, metavar="K", choices=range(0, 9),
         help="take up to K (0-8) compact bright sources out of the world image as Sun lights "
@@ -51,6 +56,8 @@ def add_arguments(p, prog):
 
 
 def run(args):
+    args.projection_given = args.projection is not None
+    args.projection = args.projection or "equirect"
     from ..blender.presets import files as preset_io
     from ..blender.world.hdri import ERROR_NORMALS, hdri_metadata
     from ..core.sh import coefficient_table
@@ -71,10 +78,14 @@ def run(args):
         hdri = None
         environment = preset_io.world_environment(scene) if args.format == "gltf" else None
     else:
-        hdri = read_hdri_file(source, args.nonfinite)
+        if args.lights is not None and args.projection == "mirror_ball":
+            raise CommandError("--lights takes equirectangular images only: leave out "
+                               "--projection mirror_ball, or --lights")
+        hdri = read_hdri_file(source, args.nonfinite, args.projection)
         coeffs, metadata, scene = hdri.coefficients, hdri_metadata(hdri), None
-        environment = (hdri.pixels, 1.0, None)
-        say(f"HDRI {source}")
+        # the specular cube of a glTF export is prefiltered from an equirect map only
+        environment = (hdri.pixels, 1.0, None) if hdri.projection == "equirect" else None
+        say(how_read(source, hdri, args.projection_given))
     if args.lights is not None:
         with timed_stage("Extract Lights"):
             coeffs, count = _lights(source, scene, hdri, args.lights)
@@ -106,13 +117,26 @@ def run(args):
     return 0
 
 
-def read_hdri_file(path, nonfinite):
+def how_read(source, hdri, given):
+    """"HDRI path (W x H, read as ...)", and for a square image read as equirect without a
+    --projection, what else it may be (a mirror ball) and how to say so (issue 20 item 14)."""
+    height, width = hdri.pixels.shape[:2]
+    if hdri.projection == "mirror_ball":
+        return f"HDRI {source} ({width}x{height}, read as a mirror ball)"
+    line = f"HDRI {source} ({width}x{height}, read as equirectangular)"
+    if width == height and not given:
+        line += ("; a square image is often a mirror ball (an equirectangular map is twice "
+                 "as wide as high): if it is one, pass --projection mirror_ball")
+    return line
+
+
+def read_hdri_file(path, nonfinite, projection="equirect"):
     """``blender.world.hdri.read_hdri`` of ``path``, its errors as one CommandError line."""
     from ..blender.world.hdri import read_hdri
     from ..core.equirect import NonFiniteError
 
     try:
-        return read_hdri(path, nonfinite, progress=stage_line)
+        return read_hdri(path, nonfinite, progress=stage_line, projection=projection)
     except NonFiniteError as error:
         raise CommandError(
             f"{path}: the image has {error.description}: {NONFINITE_ADVICE}"

@@ -504,3 +504,28 @@ def test_a_blend_blender_cannot_open_is_said_once_in_one_line(tmp_path):
     assert "Error:" not in line.removeprefix("sh_lighting: error:") and "Loading" not in line
     assert "Missing DNA block" in line or "Failed to read" in line
     assert "failed" not in result.stdout.lower(), result.stdout  # said once, by us
+
+
+def test_a_square_image_says_how_it_was_read_and_takes_a_projection(tmp_path):
+    """Issue 20 item 14: a square image was taken as equirect without a word."""
+    square = write_exr(tmp_path / "square64.exr", constant_pixels(SKY, height=64, width=64))
+    result = run("compute", square)
+    assert result.returncode == 0, result.stderr
+    assert f"HDRI {square} (64x64, read as equirectangular); a square image" in result.stdout
+    assert "pass --projection mirror_ball" in result.stdout
+
+    ball = run("compute", square, "--projection", "mirror_ball", "--out", tmp_path / "b.json")
+    assert ball.returncode == 0, ball.stderr
+    assert f"HDRI {square} (64x64, read as a mirror ball)" in ball.stdout
+    coeffs, metadata = read_preset(tmp_path / "b.json")
+    # a constant ball: the same constant light from every direction, to the 64-texel disk's
+    # rim (measured 4.1e-3 of L00's 5.3 at worst)
+    assert_allclose(coeffs, EXACT, atol=1e-3 * EXACT.max())
+    assert "mirror-ball" in metadata["notes"] and "error_estimate" not in metadata
+
+    wide = write_exr(tmp_path / "wide.exr", constant_pixels(SKY, height=8, width=16))
+    plain = run("compute", wide)
+    assert f"HDRI {wide} (16x8, read as equirectangular)\n" in plain.stdout  # no note
+    refused = one_error_line(run("compute", square, "--projection", "mirror_ball",
+                                 "--lights", "1"))
+    assert "--lights takes equirectangular images only" in refused

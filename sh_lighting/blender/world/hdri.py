@@ -23,12 +23,16 @@ from ...core.coefficients import check_coefficients
 from ...core.equirect import zero_nonfinite
 from ...core.irradiance import bounded_error_estimate
 from ...core.lights import extract_lights
+from ...core.mirror_ball import project_mirror_ball
 from ...core.projection import project_equirect
 from . import images
 
 # Normals at which an HDRI's 9-term irradiance is compared with the exact one (a Fibonacci
 # lattice): enough for a mean to ~1e-4, cheap next to loading the image.
 ERROR_NORMALS = 256
+
+
+PROJECTIONS = ("equirect", "mirror_ball")
 
 
 class Hdri(NamedTuple):
@@ -41,6 +45,7 @@ class Hdri(NamedTuple):
     coefficients: np.ndarray
     estimate: dict | None
     reference: str = ""  # what the estimate's exact irradiance was computed from
+    projection: str = "equirect"  # how the image was read: "equirect" or "mirror_ball"
 
 
 @contextmanager
@@ -60,8 +65,10 @@ def library_output_captured():
             os.close(saved)
 
 
-def read_hdri(path, nonfinite="raise", progress=None):
-    """The ``Hdri`` of the equirectangular image file at ``path``.
+def read_hdri(path, nonfinite="raise", progress=None, projection="equirect"):
+    """The ``Hdri`` of the image file at ``path``, an equirectangular map (``projection``
+    "equirect") or a mirror ball filling the image ("mirror_ball": ``core.mirror_ball``, no
+    error estimate).
 
     ``nonfinite``: "raise" refuses NaN/Inf texels (``core.equirect.NonFiniteError``), "zero"
     treats them as black, in the projection and the estimate alike. A ValueError says why a
@@ -82,6 +89,12 @@ def read_hdri(path, nonfinite="raise", progress=None):
     if nonfinite == "zero":
         pixels = zero_nonfinite(pixels)
     done("decode")
+    if projection not in PROJECTIONS:
+        raise ValueError(f"unknown projection {projection!r}: use one of {', '.join(PROJECTIONS)}")
+    if projection == "mirror_ball":
+        coeffs = check_coefficients(project_mirror_ball(pixels, nonfinite=nonfinite))
+        done("projection")
+        return Hdri(Path(path), pixels, coeffs, None, projection=projection)
     coeffs = check_coefficients(project_equirect(pixels, nonfinite=nonfinite))
     done("projection")
     bounded = bounded_error_estimate(pixels, coeffs, ERROR_NORMALS)
@@ -106,7 +119,9 @@ def hdri_metadata(hdri):
         "mapping": [0.0, 0.0, 0.0],
         "strength": 1.0,
         "created": date.today().isoformat(),
-        "notes": f"Projected exactly from the {width}x{height} image.",
+        "notes": (f"Projected exactly from the {width}x{height} image."
+                  if hdri.projection == "equirect" else
+                  f"Projected from the {width}x{height} mirror-ball image."),
     }
     if hdri.estimate is not None:
         metadata["error_estimate"] = hdri.estimate
