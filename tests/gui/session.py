@@ -391,6 +391,12 @@ def setup_scene():
     # the default mode (Keep BSDF) then predict every pixel from the SH term alone.
     bpy.data.objects.remove(bpy.data.objects["Light"])
     world.cycles_visibility.glossy = False
+    # Nor do the objects light each other: under Keep BSDF a Cycles diffuse ray sees the other
+    # surfaces' (and Suzanne's own concave) SH emission, true bounce light the prediction
+    # leaves out (run 3: the convex cube within 0.3 steps everywhere, Suzanne 37 % of its
+    # pixels within 2, its mean 3.8 steps bright).
+    for obj in (cube, monkey):
+        obj.visible_diffuse = False
     # Material Preview lights the BSDF with its own studio light: there the session applies
     # Emission Only, the mode whose pixels are the SH term alone in any viewport.
     set_apply_mode("EMISSION")
