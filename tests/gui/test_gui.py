@@ -62,7 +62,8 @@ CHECKS = (
     "Save dialog: typing goes into the name field, Return saves",
     "Remove: the confirmed preset is gone",
     "Import opens in the .blend file's folder",
-    "Export three.js: the file browser's button names the format",
+    "Export three.js: the one Export operator with three.js chosen, on a file name of its own "
+    "(not the SH preset's)",
     "node group left of the Material Output, forward wire, full name",
     "disable in Preferences removes the panels and settings",
     "enable in Preferences brings them back",
