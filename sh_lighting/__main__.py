@@ -14,7 +14,9 @@ def _interrupted(signum, frame):
 signal.signal(signal.SIGINT, _interrupted)
 signal.signal(signal.SIGTERM, _interrupted)
 
-from .cli import main  # noqa: E402
+from .cli import interrupts, main  # noqa: E402
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    status = main(sys.argv[1:])
+    interrupts.finished()  # the work is done: a late signal cannot kill Blender's shutdown
+    sys.exit(status)

@@ -59,6 +59,15 @@ def check():
         raise KeyboardInterrupt
 
 
+def finished():
+    """The command's work is done (its files are in place): a signal from now until the
+    process ends is held, not delivered, so a late Ctrl+C cannot turn a finished run into a
+    death by signal during Blender's shutdown. Only for ``python -m sh_lighting``, whose
+    process ends next (a caller of ``main`` in its own process keeps its signals)."""
+    if threading.current_thread() is threading.main_thread():
+        signal.pthread_sigmask(signal.SIG_BLOCK, SIGNALS)
+
+
 def exit_status():
     """128 + the number of the signal that stopped the command (130 for a plain Ctrl+C)."""
     return 128 + (_received[0] if _received else signal.SIGINT)

@@ -120,7 +120,7 @@ def test_compute_report_of_a_capture_and_of_a_mirror_ball(addon):
 def test_capture_width_comes_from_the_scene_override(addon, monkeypatch):
     widths = []
 
-    def fake_world_coefficients(scene, capture_width=256, error_normals=0):
+    def fake_world_coefficients(scene, capture_width=256, error_normals=0, **options):
         widths.append(capture_width)
         return KNOWN, world.WorldInfo(
             source="capture", world="fake", elapsed=0.0, capture_width=capture_width
