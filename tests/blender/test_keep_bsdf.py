@@ -111,8 +111,9 @@ def test_keep_bsdf_matches_path_tracing_where_nothing_occludes(gradient, alone):
     assert keep < 0.01 and emission > 0.3
 
 
-# measured on 5.0: 0.0026 and 0.0238; on 4.2 (its Principled BSDF): 0.0122 and 0.0355
-@pytest.mark.parametrize("ior, bound", [(1.0, 0.015 if LTS else 0.01),
+# measured on 5.0: 0.0026 and 0.0238; on 4.2 (its Principled BSDF): 0.0122 and 0.0355, and
+# 0.0151 at IOR 1 since the SH albedo follows the material's inputs through held nodes
+@pytest.mark.parametrize("ior, bound", [(1.0, 0.02 if LTS else 0.01),
                                         (1.5, 0.04 if LTS else 0.03)])
 @pytest.mark.slow
 def test_glossy_sphere_keeps_its_reflections(gradient, ior, bound):

@@ -17,6 +17,7 @@ barely moves, and the extraction only promises that it does not rise where it me
 
 from math import pi
 
+import bpy
 import numpy as np
 import pytest
 from conftest import HDRI_NAMES
@@ -24,7 +25,13 @@ from quadrature import random_directions
 
 from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core.irradiance import irradiance, reference_irradiance, total_power
-from sh_lighting.core.lights import MAX_RADIUS, extract_lights, light_irradiance, relative_errors
+from sh_lighting.core.lights import (
+    MAX_RADIUS,
+    NO_GAIN,
+    extract_lights,
+    light_irradiance,
+    relative_errors,
+)
 from sh_lighting.core.projection import project_equirect
 
 pytestmark = pytest.mark.blender
@@ -36,6 +43,11 @@ STRONG = 0.05  # a light holding this share of the power or more lowers the erro
 def test_one_light_on_bundled_hdri(name, hdri_dir, capsys):
     pixels = load_image_pixels(hdri_dir / f"{name}.exr")
     extraction = extract_lights(pixels, 1)
+    if bpy.app.version < (5, 0, 0) and name == "interior" and not extraction.lights:
+        # Blender 4.2 ships another interior.exr: its brightest source lowers no error at the
+        # extraction's normals, so it stays in the SH and the stop says so
+        assert extraction.stop_kind == NO_GAIN, extraction.stop
+        return
     assert len(extraction.lights) == 1, extraction.stop
     [light] = extraction.lights
     whole = project_equirect(pixels)
