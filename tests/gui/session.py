@@ -48,6 +48,10 @@ C1, C2, C3, C4, C5 = 0.429043, 0.511664, 0.743125, 0.886227, 0.247708  # paper, 
 # the mean colour of each object is within MEAN_TOLERANCE steps of its predicted mean.
 PIXEL_TOLERANCE = 2.0
 MATCH_FRACTION = 0.99
+# Cycles' Rendered viewport path-traces Keep BSDF's BSDF at the viewport's samples: its pixels
+# scatter (CI at 62c5632: 92.6 % within 2 steps, every object's mean within 0.34 steps), so
+# there the means carry the check (a doubled world light moved the cube's mean 13 steps).
+CYCLES_MATCH_FRACTION = 0.9
 MEAN_TOLERANCE = 1.0
 MATCH_TIMEOUT = float(os.environ.get("SH_GUI_MATCH_TIMEOUT", "40"))
 WORLD_LIT_TOLERANCE = 8.0
@@ -262,7 +266,8 @@ def compare(scene, lighting=None):
                "matching": float(np.mean(error <= PIXEL_TOLERANCE)),
                "p99_error": float(np.percentile(error, 99)), "max_error": float(error.max()),
                "objects": {}}
-    ok = figures["matching"] >= MATCH_FRACTION
+    fraction = CYCLES_MATCH_FRACTION if scene.render.engine == "CYCLES" else MATCH_FRACTION
+    ok = figures["matching"] >= fraction
     for name in np.unique(s["object"]):
         sel = s["object"] == name
         m, p = measured[sel].mean(axis=0), expect[sel].mean(axis=0)
