@@ -1,7 +1,7 @@
 """``apply PRESET [BLEND]``: a preset's coefficients set on a .blend's scene and the SH node
 group applied to its materials, saved to a new file or in place."""
 
-from .options import add_mode, add_scene
+from .options import add_blend_output, add_mode, add_scene
 from .paths import blend_relative, changed_alone, check_new_file, input_file, refuse_inputs
 from .report import CommandError, say
 from .session import open_blend, open_file, pick_scene, save_blend
@@ -18,10 +18,7 @@ def add_arguments(p, prog):
     p.add_argument("preset", metavar="PRESET", help="SH Lighting preset (.json)")
     p.add_argument("blend", metavar="BLEND", nargs="?",
                    help=".blend file to change (under blender -P: default the open one)")
-    where = p.add_mutually_exclusive_group(required=True)
-    where.add_argument("--out", metavar="NEW.blend", help="save the result to this new file")
-    where.add_argument("--in-place", action="store_true", help="replace the input .blend")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+    add_blend_output(p)
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="only the materials of these objects (default: every object)")
     add_scene(p, "scene to change")

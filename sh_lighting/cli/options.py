@@ -47,6 +47,15 @@ def add_nonfinite(parser):
                         "or treat them as black (zero)")
 
 
+def add_blend_output(p):
+    """Where a command that changes a .blend saves it: --out NEW.blend or --in-place
+    (one of them), and --overwrite for an existing --out file."""
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--out", metavar="NEW.blend", help="save the result to this new file")
+    where.add_argument("--in-place", action="store_true", help="replace the input .blend")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+
+
 def add_scene(parser, what="scene of the .blend"):
     parser.add_argument("--scene", metavar="NAME", help=f"{what} (default: active)")
 

@@ -3,7 +3,7 @@ baked by Cycles (``blender.transfer``), optionally applied to their materials, s
 file or in place."""
 
 from .apply import objects_to_apply
-from .options import add_mode, add_scene, positive
+from .options import add_blend_output, add_mode, add_scene, positive
 from .paths import blend_relative, check_new_file, refuse_inputs
 from .report import CommandError, say
 from .session import open_blend, open_file, pick_scene, save_blend
@@ -22,10 +22,7 @@ def add_arguments(p, prog):
                 "--samples 64 --apply --out shot_transfer.blend")
     p.add_argument("blend", metavar="BLEND", nargs="?",
                    help=".blend file to bake (under blender -P: default the open one)")
-    where = p.add_mutually_exclusive_group(required=True)
-    where.add_argument("--out", metavar="NEW.blend", help="save the result to this new file")
-    where.add_argument("--in-place", action="store_true", help="replace the input .blend")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+    add_blend_output(p)
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="the meshes to bake (default: every mesh the scene renders)")
     p.add_argument("--samples", type=positive, default=DEFAULT_SAMPLES,
