@@ -1,9 +1,11 @@
 """A grey ball photographed in Cycles: the scene the Match Photo tests and bench share.
 
 A unit ball at the origin (smooth UV sphere, Diffuse BSDF of albedo 0.18: no specular), the
-world an equirect image, the scene camera at −Y looking along +Y: orthographic (the ball's
-radius SIZE / ORTHO_SCALE pixels) or 85 mm at DISTANCE_85. Exact-pixel render settings (no
-denoising, no dithering, Standard view, a 0.01 px filter: each pixel is its centre's ray).
+world an equirect image (or a chrome ball's mirror-ball image), the scene camera at −Y looking
+along +Y: orthographic (the ball's radius SIZE / ORTHO_SCALE pixels) or 85 mm at DISTANCE_85;
+``turn_camera`` puts it on the other side (+Y looking along −Y) for a second photo.
+Exact-pixel render settings (no denoising, no dithering, Standard view, a 0.01 px filter:
+each pixel is its centre's ray).
 """
 
 import bpy
@@ -30,13 +32,16 @@ def sh_world_pixels():
     return (sh_basis(texel_directions(128, 256)) @ LIGHT).astype(np.float32)
 
 
-def grey_ball_scene(world_path, projection="ORTHO", strength=1.0, samples=SAMPLES):
-    """(scene, the ball's material) in the current (empty) file; see the module docstring."""
+def grey_ball_scene(world_path, projection="ORTHO", strength=1.0, samples=SAMPLES,
+                    world_projection="EQUIRECTANGULAR"):
+    """(scene, the ball's material) in the current (empty) file; see the module docstring.
+    ``world_projection``: the Environment Texture's, "MIRROR_BALL" for a chrome ball's."""
     scene = bpy.context.scene
     world = bpy.data.worlds.new("Photo world")
     tree = compat.ensure_node_tree(world)
     texture = tree.nodes.new("ShaderNodeTexEnvironment")
     texture.image = bpy.data.images.load(str(world_path))
+    texture.projection = world_projection
     background = tree.nodes["Background"]
     background.inputs["Strength"].default_value = strength
     tree.links.new(texture.outputs["Color"], background.inputs["Color"])
@@ -78,6 +83,14 @@ def grey_ball_scene(world_path, projection="ORTHO", strength=1.0, samples=SAMPLE
     scene.cycles.filter_width = 0.01
     scene.cycles.device = "CPU"
     return scene, material
+
+
+def turn_camera(scene):
+    """The scene camera moved to the ball's other side: at +Y looking along −Y, z up."""
+    camera = scene.camera
+    camera.location = (0.0, -camera.location[1], 0.0)
+    camera.rotation_euler = (np.pi / 2, 0.0, np.pi - camera.rotation_euler[2])
+    bpy.context.view_layer.update()
 
 
 def circle_of(projection):

@@ -26,6 +26,7 @@ edits (``rotate``, ``match_mapping``, ``exposure``, ``saturation``, ``band_gains
 import bpy
 
 from .blender import photo as _photo
+from .blender.photo import SecondPhoto
 from .blender import scene_data as _scene_data
 from .blender.design.edits import (  # lighting design: exact edits and windows
     DesignError,
@@ -75,7 +76,7 @@ __all__ = [
     # precomputed radiance transfer (shadows and bounce light)
     "TransferError", "bake_transfer", "transfer_status", "apply_transfer", "delete_transfer",
     # lighting from a photo of a grey ball
-    "coefficients_from_photo", "photo_exposure",
+    "coefficients_from_photo", "photo_exposure", "SecondPhoto",
 ]
 
 TransferError = _transfer.TransferError
@@ -154,7 +155,10 @@ def coefficients_from_photo(scene, path, circle, **options):
     corner. ``options`` (``blender.photo.coefficients_from_photo``): ``camera_object``
     (default the scene's camera) or ``direction`` and ``roll`` with ``projection``
     ("ORTHO"/"PERSP"), ``focal_mm``, ``sensor_mm``; ``albedo`` (0.18), ``margin`` (0.05 of
-    the radius), ``prior`` ("mirror", "ambient", "none"), ``clip``, ``store`` (True).
+    the radius), ``prior`` ("mirror", "ambient", "chrome", "photo", "none"), ``chrome`` (for
+    "chrome": a mirror-ball image file; None: the scene's world), ``second`` (for "photo": a
+    ``SecondPhoto(path, circle, camera_object=None, direction=None, roll=0.0)``), ``clip``,
+    ``store`` (True).
     Returns (the (9, 3) coefficients, the ``core.photo.PhotoFit`` report: residual,
     condition, weak_terms, used, clipped, summary()); a ValueError with one line, the scene
     unchanged, when the photo cannot give lighting.
@@ -162,12 +166,13 @@ def coefficients_from_photo(scene, path, circle, **options):
     return _photo.coefficients_from_photo(scene, path, circle, **options)
 
 
-def photo_exposure(scene, fit):
-    """Both balls: how a grey-ball ``fit`` (from ``coefficients_from_photo``) compares with
-    the scene's world (a chrome ball's mirror-ball image, or an HDRI): ``.scale``, the
-    exposure making the grey ball's L00 agree, and ``.seen``/``.everywhere``, how far the
-    rest then disagree (RMS of E, / its mean); ``summary()`` says it in one line."""
-    return _photo.exposure_against_world(scene, fit)
+def photo_exposure(scene, fit, chrome=None):
+    """Both balls: how a grey-ball ``fit`` (from ``coefficients_from_photo``) compares with a
+    chrome ball: the mirror-ball image file ``chrome``, or the scene's world when None (a
+    chrome ball's mirror-ball image, or an HDRI): ``.scale``, the exposure making the grey
+    ball's L00 agree, and ``.seen``/``.everywhere``, how far the rest then disagree (RMS of
+    E, / its mean); ``summary()`` says it in one line."""
+    return _photo.exposure_match(scene, fit, chrome)
 
 
 def get_coefficients(scene):

@@ -43,4 +43,4 @@ FILAMENT_FRAMES = {
 APPLY_MODES = ("KEEP_BSDF", "EMISSION")
 # What lights the unseen side of a grey ball in Match Photo (core.photo.PRIORS); the first
 # is the default
-PHOTO_PRIORS = ("mirror", "ambient", "none")
+PHOTO_PRIORS = ("mirror", "ambient", "chrome", "photo", "none")

@@ -12,6 +12,13 @@ in EXR and HDR files only above ``clip`` when one is given (light has no top the
 The camera: a camera object (the scene's by default: the photo taken from it), its
 orientation, ORTHO or PERSP, lens and sensor (Blender's sensor fit); or a view direction and
 roll with a projection given here (``core.ball_camera.camera_looking``).
+
+Both balls: a chrome ball is a mirror-ball image (``world.hdri.read_hdri``, projection
+"mirror_ball"), or the scene's world when that is one (read as the add-on reads any world,
+Environment Texture projection Mirror Ball). It is the prior "chrome" for the unseen side, and
+``exposure_match`` compares the grey ball's fit with it (``core.photo.match_exposure``). A
+second photo (``SecondPhoto``) is read and fitted like the first, prior "none", for the
+prior "photo".
 """
 
 import os
@@ -21,11 +28,17 @@ import bpy
 import numpy as np
 
 from ..core.ball_camera import PhotoCamera, PhotoError, camera_looking
-from ..core.photo import DEFAULT_ALBEDO, DEFAULT_MARGIN, DEFAULT_PRIOR_WEIGHT, fit_photo
-from ..core.photo import match_exposure
+from ..core.photo import (
+    DEFAULT_ALBEDO,
+    DEFAULT_MARGIN,
+    DEFAULT_PRIOR_WEIGHT,
+    fit_photo,
+    match_exposure,
+)
 from . import scene_data
 from .world import images
 from .world import reader as world
+from .world.hdri import read_hdri
 
 # File formats whose values have no top code (linear light): nothing is clipped by default.
 HDR_FORMATS = {"OPEN_EXR", "OPEN_EXR_MULTILAYER", "HDR"}
@@ -104,22 +117,88 @@ def photo_camera(scene, camera_object=None, direction=None, roll=0.0, projection
     return camera, {"camera": camera_object.name}
 
 
+@dataclass(frozen=True)
+class SecondPhoto:
+    """A second photo of the same ball from another side (the prior "photo"): its file, the
+    ball's circle in it, and its camera: a camera object, or a view direction and roll (the
+    first photo's projection, lens and sensor)."""
+
+    path: str
+    circle: tuple
+    camera_object: object = None
+    direction: tuple = None
+    roll: float = 0.0
+
+
+def _clipped(source, clip):
+    """The file's clipped pixels, and those with a linear channel ≥ ``clip`` if given."""
+    if clip is None:
+        return source.clipped
+    return source.clipped | (source.pixels[..., :3] >= float(clip)).any(axis=-1)
+
+
+def chrome_coefficients(scene, chrome=None):
+    """(the chrome ball's (9, 3) L_lm, its provenance name): from a mirror-ball image file
+    ``chrome``, or the scene's world when None (a chrome ball set as the world)."""
+    if chrome is None:
+        coeffs, _info = world.world_coefficients(scene)
+        return coeffs, "WORLD"
+    path = os.path.normpath(bpy.path.abspath(os.fspath(chrome)))
+    if not os.path.isfile(path):
+        raise PhotoError(f"chrome ball '{path}' does not exist: check the path")
+    return read_hdri(path, projection="mirror_ball").coefficients, os.path.basename(path)
+
+
+def _second_fit(scene, second, first_camera, albedo, margin, clip):
+    """(``PhotoFit`` of the ``SecondPhoto``, prior "none"; its provenance entries, each
+    named "second_...")."""
+    if second is None:
+        raise PhotoError("the second-photo prior needs a second photo of the ball from "
+                         "another side: give its file, circle and camera or view direction")
+    if second.camera_object is None and second.direction is None:
+        raise PhotoError("the second photo needs its camera: a camera object, or the view "
+                         "direction it was taken along")
+    camera, record = photo_camera(scene, second.camera_object, second.direction, second.roll,
+                                  first_camera.projection, first_camera.focal_mm,
+                                  first_camera.sensor_mm)
+    source = read_photo(second.path)
+    fit = fit_photo(source.pixels, second.circle, camera, albedo=albedo, margin=margin,
+                    clip=_clipped(source, clip), prior="none")
+    record = {"file": os.path.basename(source.path),
+              "circle": [float(v) for v in second.circle], **record,
+              "residual": fit.residual, "used": fit.used}
+    return fit, {f"second_{key}": value for key, value in record.items()}
+
+
 def coefficients_from_photo(scene, path, circle, *, camera_object=None, direction=None,
                             roll=0.0, projection="ORTHO", focal_mm=50.0, sensor_mm=36.0,
                             albedo=DEFAULT_ALBEDO, margin=DEFAULT_MARGIN, prior="mirror",
-                            prior_weight=DEFAULT_PRIOR_WEIGHT, clip=None, store=True):
+                            prior_weight=DEFAULT_PRIOR_WEIGHT, clip=None, chrome=None,
+                            second=None, store=True):
     """Fit the photo at ``path`` (ball ``circle`` (cx, cy, r) in pixels from the top-left)
     and store the result on ``scene`` (unless ``store`` is False). Returns (coeffs (9, 3),
     ``core.photo.PhotoFit``). ``clip``: a linear threshold added to the file's own clipping.
+    Prior "chrome": the chrome ball is the mirror-ball image file ``chrome``, or the scene's
+    world when None, and the record's "exposure_..." entries are the ``exposure_match``
+    against it (with its "exposure_summary" line); prior "photo": ``second`` is a ``SecondPhoto``.
     Any problem raises a ValueError (PhotoError) with one line, the scene unchanged."""
     camera, camera_record = photo_camera(scene, camera_object, direction, roll, projection,
                                          focal_mm, sensor_mm)
     source = read_photo(path)
-    clipped = source.clipped
-    if clip is not None:
-        clipped = clipped | (source.pixels[..., :3] >= float(clip)).any(axis=-1)
-    fit = fit_photo(source.pixels, circle, camera, albedo=albedo, margin=margin, clip=clipped,
-                    prior=prior, prior_weight=prior_weight)
+    reference, extra = None, {}
+    if prior == "chrome":
+        reference, extra["chrome"] = chrome_coefficients(scene, chrome)
+    elif prior == "photo":
+        reference, extra = _second_fit(scene, second, camera, albedo, margin, clip)
+    fit = fit_photo(source.pixels, circle, camera, albedo=albedo, margin=margin,
+                    clip=_clipped(source, clip), prior=prior, prior_weight=prior_weight,
+                    reference=reference)
+    if fit.prior_scale is not None:
+        extra["prior_scale"] = [float(v) for v in fit.prior_scale]
+        match = match_exposure(fit.coefficients, reference, fit.normals)
+        extra.update(exposure_scale=match.scale, exposure_seen_scale=match.seen_scale,
+                     exposure_seen=match.seen, exposure_everywhere=match.everywhere,
+                     exposure_summary=match.summary())
     record = {
         "source": "PHOTO", "file": os.path.basename(source.path), "path": source.path,
         "circle": [float(v) for v in circle], **camera_record,
@@ -128,7 +207,7 @@ def coefficients_from_photo(scene, path, circle, *, camera_object=None, directio
         "albedo": float(albedo), "margin": float(margin), "prior": prior,
         "prior_weight": fit.prior_weight, "residual": fit.residual,
         "condition": fit.condition, "used": fit.used, "clipped": fit.clipped,
-        "weak_terms": list(fit.weak_terms),
+        "weak_terms": list(fit.weak_terms), **extra,
     }
     if camera.projection == "PERSP":
         record.update(focal_mm=camera.focal_mm, sensor_mm=camera.sensor_mm,
@@ -137,10 +216,11 @@ def coefficients_from_photo(scene, path, circle, *, camera_object=None, directio
     return coeffs, fit
 
 
-def exposure_against_world(scene, fit):
-    """Both balls: ``core.photo.ExposureMatch`` of a grey-ball ``fit`` against the lighting of
-    the scene's world as the add-on reads it (a chrome ball's mirror-ball image, an HDRI):
-    the exposure scale that makes the grey ball's L00 agree, and how far the rest disagree
-    on the seen normals and everywhere. Reads the world only (nothing is stored)."""
-    chrome, _info = world.world_coefficients(scene)
-    return match_exposure(fit.coefficients, chrome, fit.normals)
+def exposure_match(scene, fit, chrome=None):
+    """Both balls: ``core.photo.ExposureMatch`` of a grey-ball ``fit`` against a chrome ball
+    (the mirror-ball image file ``chrome``, or the lighting of the scene's world as the add-on
+    reads it when None: a chrome ball's mirror-ball image, an HDRI): the exposure scale that
+    makes the grey ball's L00 agree, and how far the rest disagree on the seen normals and
+    everywhere. Reads only (nothing is stored)."""
+    coeffs, _name = chrome_coefficients(scene, chrome)
+    return match_exposure(fit.coefficients, coeffs, fit.normals)

@@ -47,7 +47,25 @@ def add_arguments(p, prog):
                    help=f"fraction of the radius left out at the rim (default {DEFAULT_MARGIN})")
     p.add_argument("--prior", choices=PHOTO_PRIORS, default=PHOTO_PRIORS[0],
                    help="what lights the unseen side: mirror (the seen side mirrored, the "
-                   "default), ambient (its mean), none (the fit extrapolated)")
+                   "default), ambient (its mean), chrome (a chrome ball: --chrome, or the "
+                   "--blend's world), photo (a second photo: --second), none (the fit "
+                   "extrapolated)")
+    p.add_argument("--chrome", metavar="IMAGE",
+                   help="a chrome ball's mirror-ball image of the same place: the grey ball's "
+                   "exposure is compared with it (printed), and it is --prior chrome's")
+    p.add_argument("--second", metavar="IMAGE",
+                   help="for --prior photo: a photo of the same ball from another side, same "
+                   "exposure")
+    p.add_argument("--second-circle", nargs=3, type=float, metavar=("CX", "CY", "R"),
+                   help="the ball's circle in --second, in pixels")
+    p.add_argument("--second-direction", nargs=3, type=float, metavar=("X", "Y", "Z"),
+                   help="the world direction --second looks along (its lens and projection: "
+                   "the first photo's)")
+    p.add_argument("--second-roll", type=float, default=0.0, metavar="DEGREES",
+                   help="roll of --second about --second-direction")
+    p.add_argument("--second-camera", metavar="NAME",
+                   help="instead of --second-direction: the camera object of --blend that "
+                   "took --second")
     p.add_argument("--clip", type=float, metavar="VALUE",
                    help="also leave out pixels with a linear channel at or above VALUE")
     p.add_argument("--out", metavar="PRESET", help="write the coefficients to this file")
@@ -63,6 +81,9 @@ def run(args):
     from ..core.sh import coefficient_table
 
     image = input_file(args.image, "photo", "give the photo's image file")
+    chrome = None if args.chrome is None else input_file(args.chrome, "chrome ball",
+                                                         "give its mirror-ball image file")
+    second = _second_photo(args)
     blend = None
     if args.blend is not None:
         blend = open_blend(args.blend)
@@ -76,15 +97,23 @@ def run(args):
         refuse_inputs(out, "--out", {"photo": image})
         check_new_file(out, args.overwrite, what="--out")
     scene = pick_scene(args.scene)
+    if second is not None and args.second_camera is not None:
+        camera = bpy_object(args.second_camera)
+        second = api.SecondPhoto(second.path, second.circle, camera_object=camera)
     try:
         coeffs, fit = api.coefficients_from_photo(
             scene, image, tuple(args.circle), direction=args.direction,
             roll=math.radians(args.roll), projection=args.projection.upper(),
             focal_mm=args.lens, sensor_mm=args.sensor, albedo=args.albedo,
-            margin=args.margin, prior=args.prior, clip=args.clip, store=False)
+            margin=args.margin, prior=args.prior, clip=args.clip, chrome=chrome,
+            second=second, store=False)
+        exposure = (api.photo_exposure(scene, fit, chrome)
+                    if chrome is not None or args.prior == "chrome" else None)
     except ValueError as error:
         raise CommandError(f"{image}: {error}") from None
     say(f"Photo {image}: {fit.summary()}")
+    if exposure is not None:
+        say(f"Both balls: {exposure.summary()}")
     say("Lighting coefficients L_lm (raw radiance, Blender world axes, z up):")
     for line in coefficient_table(coeffs):
         say(line)
@@ -99,3 +128,34 @@ def run(args):
             raise CommandError(str(error)) from None
         say(f"Wrote {FORMATS[args.format][0]} {path}")
     return 0
+
+
+def _second_photo(args):
+    """The ``SecondPhoto`` of --second (camera object resolved later), None without it, or a
+    CommandError when --prior photo lacks it or its circle or camera."""
+    if args.second is None:
+        if args.prior == "photo":
+            raise CommandError("--prior photo needs --second IMAGE --second-circle CX CY R and "
+                               "--second-direction X Y Z (or --second-camera NAME)")
+        return None
+    if args.second_circle is None or (args.second_direction is None
+                                      and args.second_camera is None):
+        raise CommandError("--second needs --second-circle CX CY R and --second-direction X Y "
+                           "Z (or --second-camera NAME)")
+    from .. import api
+
+    path = input_file(args.second, "second photo", "give the second photo's image file")
+    return api.SecondPhoto(path, tuple(args.second_circle),
+                           direction=args.second_direction,
+                           roll=math.radians(args.second_roll))
+
+
+def bpy_object(name):
+    """The camera object ``name`` of the open .blend, or a CommandError."""
+    import bpy
+
+    camera = bpy.data.objects.get(name)
+    if camera is None or camera.type != "CAMERA":
+        raise CommandError(f"--second-camera: no camera object '{name}' in the .blend: give "
+                           "one of its cameras' names, or --second-direction")
+    return camera

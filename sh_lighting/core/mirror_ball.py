@@ -18,7 +18,7 @@ whose centre lies outside the disk carry no light (a mirror-ball photograph's co
 
 import numpy as np
 
-from .equirect import NonFiniteError, check_pixels, describe_nonfinite
+from .equirect import NonFiniteError, check_pixels, describe_nonfinite, direction_to_texel
 from .sh import num_coefficients, sh_basis
 
 # Texels within this many texel sizes of the rim are integrated on a sub-grid: there the
@@ -123,3 +123,17 @@ def project_mirror_ball(pixels, max_order=2, nonfinite="raise"):
         rgb = np.where(used[..., None], rgb, 0.0)
         coeffs += np.einsum("hwk,hwc->kc", w, rgb)
     return coeffs
+
+
+def mirror_ball_image(equirect, size):
+    """The ``size``² mirror-ball image (rows top to bottom) of an equirect map (H, W, C): each
+    texel inside the disk the equirect texel its centre's direction falls in (nearest, no
+    filtering), 0 outside: what a chrome ball photographed from −Y shows of that world."""
+    pixels = np.asarray(equirect)
+    centres = (np.arange(size) + 0.5) / size
+    u, v = np.meshgrid(centres, centres[::-1])  # v from the bottom
+    directions = mirror_ball_to_direction(u, v)
+    inside = np.isfinite(directions[..., 0])
+    image = np.zeros((size, size) + pixels.shape[2:], dtype=pixels.dtype)
+    image[inside] = pixels[direction_to_texel(directions[inside], *pixels.shape[:2])]
+    return image

@@ -11,7 +11,8 @@ margin) is badly conditioned: the unseen side can be far off and negative. The u
 therefore filled by a *prior* the user chooses, added as pseudo-observations on unseen normals
 (``sh.spread_normals`` farther than 1.5 lattice spacings from every seen normal) with a total
 weight of at most ``prior_weight`` × the pixels', halved until the prior moves the seen
-picture by at most ``PRIOR_HEADROOM`` × the nine-term misfit (√(residual² − noise²), at
+picture by at most ``PRIOR_HEADROOM`` (a guessed prior) or ``MEASURED_HEADROOM`` (a chrome
+ball, a second photo) × the nine-term misfit (√(residual² − noise²), at
 least ``RESIDUAL_FLOOR``; the noise from the pixels' second differences), so the prior
 decides only what the photo leaves open; the weight used is reported:
 
@@ -19,6 +20,13 @@ decides only what the photo leaves open; the weight used is reported:
   value at n is the plain fit's at n − 2 (n·w) w, w towards the camera; where that mirror
   image is unseen too, the seen side's mean);
 * "ambient": the seen side's mean irradiance, a constant;
+* "chrome": a chrome ball's nine L_lm (a mirror-ball image of the same place,
+  ``mirror_ball.project_mirror_ball``), scaled per channel to the grey ball's pixels (least
+  squares on the seen normals: the chrome ball's reflectance and exposure are unknown); its
+  picture is the value on the unseen normals;
+* "photo": a second photo of the same ball from another side (same albedo and exposure, its
+  own ``PhotoFit``): the joint least-squares fit of both photos' pixels gives the value on the
+  normals the first photo does not see;
 * "none": no prior (the plain least-squares fit).
 
 Then the fit is kept from negative light: while the exact minimum of E over the sphere
@@ -45,7 +53,8 @@ from .minimum import irradiance_minimum, mean_irradiance, negative_light_warning
 from .sh import COEFFICIENT_NAMES, band_of_each_coefficient, lambert_band_factors, sh_basis
 from .sh import spread_normals
 
-PRIORS = ("mirror", "ambient", "none")  # choices.PHOTO_PRIORS (the CLI's, without numpy)
+# choices.PHOTO_PRIORS (the CLI's, without numpy); the first is the default
+PRIORS = ("mirror", "ambient", "chrome", "photo", "none")
 DEFAULT_ALBEDO = 0.18
 DEFAULT_MARGIN = 0.05  # of the radius: the rim pixels mix ball and background
 DEFAULT_PRIOR_WEIGHT = 1.0  # the most: as much as all the pixels together
@@ -66,10 +75,18 @@ PRIOR_NORMALS = 400  # lattice normals the prior may be placed on (``sh.spread_n
 # orthogonal to the residual, √(1 + 0.35²) = 1.06), within the issue's 1.25× even when the
 # misfit is overestimated twice (noise the second differences miss).
 PRIOR_HEADROOM = 0.35
+# A measured prior (a chrome ball, a second photo) is data about the unseen side, not a
+# guess: it may move the seen picture further, √(1 + 0.5²) = 1.12 < 1.25. Measured (chrome
+# prior, headroom 0.35 / 0.5 / 0.6): a synthetic 8-bit ball under a sunny world, all normals
+# 4.1 / 0.68 / 0.55 %, the seen side 1.05 / 1.12 / 1.15× the nine-term limit; a Cycles
+# render under courtyard as a chrome-ball world (10 % render noise), all normals
+# 6.6 % at 0.6 and 9.4 % at 0.5, the seen side 1.20× and 1.13×: 0.6 is too close to 1.25.
+MEASURED_HEADROOM = 0.5
 RESIDUAL_FLOOR = 0.005
 PRIOR_STEPS = 40  # halvings of the prior's weight
 NEGATIVE_STEPS = 24
 NEGATIVE_TOLERANCE = 1e-4  # of the channel's mean irradiance
+MEASURED_PRIORS = {"chrome": "chrome ball", "photo": "second photo"}  # summary's names
 
 
 @dataclass(frozen=True)
@@ -84,8 +101,11 @@ class PhotoFit:
     condition: condition number of the equilibrated design matrix of the used pixels.
     weak_terms: names of the terms in its poorly constrained directions (may be empty).
     used, clipped, invalid: pixels fitted; left out as clipped; left out as non-finite or
-        masked. prior: its name; prior_weight: its total weight used, / the pixels'. negative: ``negative_light_warning`` or None.
-    normals: (N, 3) world normals of the used pixels; towards: the view axis (to the camera).
+        masked. prior: its name; prior_weight: its total weight used, / the pixels'.
+    prior_scale: (3,) the chrome ball's scale per channel (prior "chrome"), else None.
+    negative: ``negative_light_warning`` or None.
+    normals: (N, 3) world normals of the used pixels; values: (N, 3) their pixels;
+    towards: the view axis (to the camera).
     """
 
     coefficients: np.ndarray
@@ -99,19 +119,25 @@ class PhotoFit:
     invalid: int
     prior: str
     prior_weight: float
+    prior_scale: object
     negative: object
     normals: np.ndarray
+    values: np.ndarray
     towards: np.ndarray
 
     def summary(self):
         """One line for the user: residual, condition, poorly constrained terms, pixels."""
         weak = ", ".join(self.weak_terms) if self.weak_terms else "none"
+        scale = ("" if self.prior_scale is None else
+                 ", scaled × " + " / ".join(f"{v:.3g}" for v in self.prior_scale))
         return (
             f"residual {100.0 * self.residual:.2f} % of the mean (noise {100.0 * self.noise:.2f} %)"
             f", condition {self.condition:.0f}"
             f", poorly constrained: {weak}; {self.used} pixels used, {self.clipped} clipped and "
-            f"{self.invalid} unusable left out; unseen side: {self.prior}"
-            + (f" (weight {self.prior_weight:.2g} of the pixels')" if self.prior != "none" else "")
+            f"{self.invalid} unusable left out; unseen side: "
+            f"{MEASURED_PRIORS.get(self.prior, self.prior)}"
+            + (f" (weight {self.prior_weight:.2g} of the pixels'{scale})"
+               if self.prior != "none" else "")
         )
 
 
@@ -131,7 +157,7 @@ def ball_picture(coeffs, height, width, circle, camera, albedo=DEFAULT_ALBEDO, b
     return picture
 
 
-def _check_inputs(pixels, albedo, margin, prior, prior_weight):
+def _check_inputs(pixels, albedo, margin, prior, prior_weight, reference):
     a = np.asarray(pixels)
     if a.ndim != 3 or a.shape[2] < 3 or not np.issubdtype(a.dtype, np.number):
         raise PhotoError(f"the photo must be an (H, W, 3 or 4) array of numbers, got shape "
@@ -145,6 +171,14 @@ def _check_inputs(pixels, albedo, margin, prior, prior_weight):
         raise PhotoError(f"the prior must be one of {', '.join(PRIORS)}, got {prior!r}")
     if not (np.isfinite(prior_weight) and prior_weight >= 0.0):
         raise PhotoError(f"the prior weight must be ≥ 0, got {prior_weight!r}")
+    if prior == "chrome":
+        chrome = np.asarray(reference if reference is not None else np.nan, dtype=np.float64)
+        if chrome.shape != (9, 3) or not np.isfinite(chrome).all():
+            raise PhotoError("the chrome prior needs the chrome ball's nine RGB L_lm (a "
+                             "mirror-ball image's): give the chrome ball, or another prior")
+    if prior == "photo" and not isinstance(reference, PhotoFit):
+        raise PhotoError("the second-photo prior needs the second photo's fit: give the "
+                         "second photo, its circle and its camera, or another prior")
     return a
 
 
@@ -181,6 +215,12 @@ def _weak_terms(matrix):
     return condition, tuple(dict.fromkeys(names))
 
 
+def _prior_lattice():
+    """(the ``PRIOR_NORMALS`` lattice normals a prior may be placed on, 1.5 lattice spacings
+    in radians: farther than that from every seen normal is unseen)."""
+    return spread_normals(PRIOR_NORMALS), 1.5 * np.sqrt(4.0 * np.pi / PRIOR_NORMALS)
+
+
 def _unseen(normals, lattice, spacing):
     """Which ``lattice`` normals are farther than ``spacing`` radians from every seen one."""
     step = max(1, normals.shape[0] // 4000)
@@ -188,10 +228,29 @@ def _unseen(normals, lattice, spacing):
     return nearest < np.cos(spacing)
 
 
-def prior_observations(prior, plain, normals, towards, values_mean, albedo):
-    """(unseen lattice normals (M, 3), targets (M, 3) in pixel units) of ``prior``."""
-    lattice = spread_normals(PRIOR_NORMALS)
-    spacing = 1.5 * np.sqrt(4.0 * np.pi / PRIOR_NORMALS)
+def chrome_scale(chrome, normals, values, albedo):
+    """(3,) per channel s minimising |s · albedo E_chrome(n) / π − v| over the seen normals
+    and their pixels ``values``: the chrome ball's L_lm in the grey ball's units."""
+    picture = design_matrix(normals, albedo) @ np.asarray(chrome, dtype=np.float64)
+    scale = np.sum(picture * values, axis=0) / np.maximum(np.sum(picture**2, axis=0),
+                                                          np.finfo(float).tiny)
+    if not (scale > 0.0).all():
+        raise PhotoError("the chrome ball's light does not match the grey ball's (a channel "
+                         "comes out negative or zero): check that both balls are of one place")
+    return scale
+
+
+def joint_fit(normals, values, second, albedo):
+    """(9, 3) least-squares L_lm of two photos' pixels together: this photo's ``normals`` and
+    ``values`` and a ``second`` ``PhotoFit``'s (the same ball, albedo and exposure)."""
+    matrix = design_matrix(np.vstack([normals, second.normals]), albedo)
+    return np.linalg.lstsq(matrix, np.vstack([values, second.values]), rcond=None)[0]
+
+
+def prior_observations(prior, plain, normals, towards, values_mean, albedo, reference=None):
+    """(unseen lattice normals (M, 3), targets (M, 3) in pixel units) of ``prior``;
+    ``reference``: for "chrome" and "photo", the (9, 3) L_lm whose picture is the target."""
+    lattice, spacing = _prior_lattice()
     unseen = _unseen(normals, lattice, spacing)
     where = lattice[unseen]
     targets = np.broadcast_to(values_mean, where.shape).copy()
@@ -199,12 +258,15 @@ def prior_observations(prior, plain, normals, towards, values_mean, albedo):
         mirrored = where - 2.0 * (where @ towards)[:, None] * towards
         seen = ~_unseen(normals, mirrored, spacing)
         targets[seen] = albedo * irradiance(plain, mirrored[seen]) / np.pi
+    elif prior in ("chrome", "photo"):
+        targets = albedo * irradiance(reference, where) / np.pi
     return where, targets
 
 
 def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
               margin=DEFAULT_MARGIN, clip=None, prior="mirror",
-              prior_weight=DEFAULT_PRIOR_WEIGHT, mask=None, max_residual=MAX_RESIDUAL):
+              prior_weight=DEFAULT_PRIOR_WEIGHT, mask=None, max_residual=MAX_RESIDUAL,
+              reference=None):
     """The nine RGB L_lm of the world lighting a grey ball in a photo (module docstring).
 
     ``pixels``: (H, W, 3 or 4) linear RGB, rows top to bottom (alpha ignored); ``circle``:
@@ -212,10 +274,12 @@ def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
     channel ≥ it are left out (an 8-bit photo decoded to linear: 1.0), or an (H, W) bool
     array of the clipped pixels (e.g. a byte of 255 in the file), None for none;
     ``mask``: (H, W) bool, False where the ball is hidden; ``max_residual``: above it the
-    pixels are not a diffuse ball's and a PhotoError is raised (None: never).
+    pixels are not a diffuse ball's and a PhotoError is raised (None: never); ``reference``:
+    for prior "chrome" the chrome ball's (9, 3) L_lm, for "photo" the second photo's
+    ``PhotoFit`` (fitted with prior "none").
     Returns a ``PhotoFit``; raises PhotoError with one line saying what to do.
     """
-    a = _check_inputs(pixels, albedo, margin, prior, prior_weight)
+    a = _check_inputs(pixels, albedo, margin, prior, prior_weight, reference)
     height, width = a.shape[:2]
     cx, cy, r = check_circle(circle, height, width, MIN_RADIUS)
     rows, cols, normals, towards = ball_normals(height, width, (cx, cy, r), camera, margin)
@@ -262,13 +326,22 @@ def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
         )
     condition, weak = _weak_terms(matrix)
     noise = pixel_noise(a, rows[used], cols[used]) / float(np.mean(mean))
-    coeffs, weight, share = plain, 0.0, 0.0
+    coeffs, weight, share, gain = plain, 0.0, 0.0, None
+    seen_values = values
+    if prior == "chrome":
+        gain = chrome_scale(reference, normals, values, albedo)
+        reference = np.asarray(reference, dtype=np.float64) * gain
+    elif prior == "photo":
+        _check_second_photo(normals, reference)
+        reference = joint_fit(normals, values, reference, albedo)
     if prior != "none" and prior_weight > 0.0:
-        where, targets = prior_observations(prior, plain, normals, towards, mean, albedo)
+        where, targets = prior_observations(prior, plain, normals, towards, mean, albedo,
+                                            reference)
         if where.size:
             prior_matrix = design_matrix(where, albedo)
             misfit = np.sqrt(max(residual**2 - noise**2, 0.0))
-            allowed = PRIOR_HEADROOM * max(misfit, RESIDUAL_FLOOR) * float(np.mean(mean))
+            headroom = MEASURED_HEADROOM if prior in MEASURED_PRIORS else PRIOR_HEADROOM
+            allowed = headroom * max(misfit, RESIDUAL_FLOOR) * float(np.mean(mean))
             coeffs, weight = _prior_fit(matrix, values, plain, prior_matrix, targets,
                                         prior_weight * count / where.shape[0], allowed)
             share = weight * where.shape[0] / count
@@ -277,8 +350,16 @@ def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
             values = np.vstack([values, scale * targets])
     coeffs = _never_negative(coeffs, matrix, values, albedo, count)
     return PhotoFit(coeffs, plain, residual, noise, condition, weak, count, n_clipped,
-                    int((~usable).sum()), prior, float(share),
-                    negative_light_warning(coeffs), normals, np.asarray(towards))
+                    int((~usable).sum()), prior, float(share), gain,
+                    negative_light_warning(coeffs), normals, seen_values, np.asarray(towards))
+
+
+def _check_second_photo(normals, second):
+    """A PhotoError when the ``second`` photo sees no lattice normal the first leaves unseen."""
+    lattice, spacing = _prior_lattice()
+    if not (_unseen(normals, lattice, spacing) & ~_unseen(second.normals, lattice, spacing)).any():
+        raise PhotoError("the second photo sees only what the first sees: take it from "
+                         "another side of the ball (e.g. opposite the first)")
 
 
 def _prior_fit(matrix, values, plain, prior_matrix, targets, most, allowed):

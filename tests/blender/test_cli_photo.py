@@ -51,3 +51,33 @@ def test_from_photo_refuses_bad_input_in_one_line(tmp_path):
         assert result.returncode == 1
         lines = result.stderr.strip().splitlines()
         assert len(lines) == 1 and message in lines[0], result.stderr
+
+
+def test_from_photo_with_both_balls_and_a_second_photo(tmp_path):
+    """--chrome (a mirror-ball image of the same nine-term world, 0.5× exposure) prints the
+    exposure match; --prior photo with --second fills the unseen side from the back."""
+    from sh_lighting.core.equirect import texel_directions
+    from sh_lighting.core.mirror_ball import mirror_ball_image
+    from sh_lighting.core.sh import sh_basis
+
+    front, back = camera_looking((0.0, 1.0, 0.0)), camera_looking((0.0, -1.0, 0.0))
+    photo = write_exr(tmp_path / "front.exr",
+                      core_photo.ball_picture(LIGHT, 64, 64, (32, 32, 30), front))
+    second = write_exr(tmp_path / "back.exr",
+                       core_photo.ball_picture(LIGHT, 64, 64, (32, 32, 30), back))
+    world = sh_basis(texel_directions(64, 128)) @ LIGHT
+    chrome = write_exr(tmp_path / "chrome.exr", 0.5 * mirror_ball_image(world, 128))
+    out = tmp_path / "ball.json"
+    result = run("from-photo", photo, "--circle", 32, 32, 30, "--direction", 0, 1, 0,
+                 "--prior", "photo", "--second", second, "--second-circle", 32, 32, 30,
+                 "--second-direction", 0, -1, 0, "--chrome", chrome, "--out", out)
+    assert result.returncode == 0, result.stderr
+    assert "unseen side: second photo" in result.stdout
+    # The chrome ball's image is half as bright: × 0.5 (nearest texels: within 1 %).
+    line, = [x for x in result.stdout.splitlines() if x.startswith("Both balls: exposure ×")]
+    assert float(line.split("×")[1].split()[0]) == pytest.approx(0.5, rel=0.01), line
+    stored, _ = read_preset(out)
+    assert np.abs(stored - LIGHT).max() < 1e-3 * np.abs(LIGHT).max()
+    refused = run("from-photo", photo, "--circle", 32, 32, 30, "--direction", 0, 1, 0,
+                  "--prior", "photo")
+    assert refused.returncode == 1 and "--prior photo needs --second" in refused.stderr

@@ -25,11 +25,13 @@ from benchmarks.photo_scene import (
     render_exr,
     render_png,
     sh_world_pixels,
+    turn_camera,
 )
 from sh_lighting import api
 from sh_lighting.blender import scene_data
 from sh_lighting.core.downsample import block_downsample
 from sh_lighting.core.irradiance import irradiance, reference_irradiance
+from sh_lighting.core.mirror_ball import mirror_ball_image, project_mirror_ball
 from sh_lighting.core.photo import (
     best_nine_term_error,
     relative_rms,
@@ -163,6 +165,8 @@ def hostile_photos(folder):
     ("noise", "away from any diffuse ball"),
     ("missing", "does not exist"),
     ("no camera", "no camera: set the scene's camera"),
+    ("no second photo", "the second-photo prior needs a second photo"),
+    ("no chrome ball", "chrome ball '"),
 ])
 def test_hostile_input_one_line_and_nothing_changed(case, message, photos, addon, tmp_path):
     scene, _ = grey_ball_scene(photos["sh_world"])
@@ -171,7 +175,12 @@ def test_hostile_input_one_line_and_nothing_changed(case, message, photos, addon
     paths = hostile_photos(tmp_path)
     cx, cy, r = circle_of("ORTHO")
     path, circle = photos["sh_png"], (cx, cy, r)
-    if case == "outside":
+    prior, chrome = "mirror", ""
+    if case == "no second photo":
+        prior = "photo"
+    elif case == "no chrome ball":
+        prior, chrome = "chrome", str(tmp_path / "no_chrome.exr")
+    elif case == "outside":
         circle = (500.0, 48.0, 20.0)
     elif case.startswith("radius"):
         circle = (cx, cy, float(case[-1]))
@@ -186,8 +195,10 @@ def test_hostile_input_one_line_and_nothing_changed(case, message, photos, addon
 
     result, reports = run_execute(
         SHLIGHT_OT_match_photo, filepath=path, circle=circle, albedo=0.18, margin=0.05,
-        prior="mirror", camera="SCENE", direction=(0.0, 1.0, 0.0), roll=0.0,
-        projection="ORTHO", focal_mm=85.0, sensor_mm=36.0, clip=0.0)
+        prior=prior, camera="SCENE", direction=(0.0, 1.0, 0.0), roll=0.0,
+        projection="ORTHO", focal_mm=85.0, sensor_mm=36.0, clip=0.0, chrome_filepath=chrome,
+        second_filepath="", second_circle=(0.0, 0.0, 0.0), second_direction=(0.0, -1.0, 0.0),
+        second_roll=0.0)
     assert result == {"CANCELLED"}
     (kinds, text), = reports
     assert kinds == {"ERROR"} and message in text and "\n" not in text, text
@@ -227,6 +238,71 @@ def test_error_against_added_noise_and_a_hidden_quarter(photos, addon):
     assert full[0.0][0] < full[0.05][0] < full[0.2][0]
     assert quarter[0.0][0] < EXACT_BOUND and quarter[0.2][0] < 0.02
     assert quarter[0.0][2] > full[0.0][2] > 10.0  # the condition number
+
+
+@pytest.fixture(scope="module")
+def both_balls(photos, tmp_path_factory):
+    """Both balls on set: a chrome ball's mirror-ball image of courtyard (256 px, made from the
+    equirect map) as the world, Mirror Ball projection; the grey ball photographed in it one
+    stop under (view exposure −1), 85 mm, 8-bit, from −Y and again from +Y."""
+    folder = tmp_path_factory.mktemp("both_balls")
+    courtyard = linear(photos["hdri"])
+    out = {"chrome": write_exr(folder / "chrome.exr", mirror_ball_image(courtyard, 256)),
+           "courtyard": courtyard}
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene, _ = grey_ball_scene(out["chrome"], "PERSP", world_projection="MIRROR_BALL")
+    scene.view_settings.exposure = -1.0
+    out["front"] = render_png(scene, folder / "front.png")
+    turn_camera(scene)
+    out["back"] = render_png(scene, folder / "back.png")
+    return out
+
+
+def test_both_balls_the_chrome_ball_calibrates_the_exposure_and_fills_the_unseen_side(
+        both_balls, addon, capsys):
+    scene, _ = grey_ball_scene(both_balls["chrome"], "PERSP", world_projection="MIRROR_BALL")
+    world = project_mirror_ball(linear(both_balls["chrome"]))  # what the world's light is
+    everywhere = spread_normals(512)
+    second = api.SecondPhoto(both_balls["back"], circle_of("PERSP"), direction=(0.0, -1.0, 0.0))
+    small = block_downsample(both_balls["courtyard"], 4)[0]
+    rows = {}
+    for prior in ("mirror", "chrome", "photo"):
+        coeffs, fit = api.coefficients_from_photo(scene, both_balls["front"], circle_of("PERSP"),
+                                                  prior=prior, second=second)
+        normals = fit.normals[::3]
+        truth = reference_irradiance(small, normals)
+        limit = best_nine_term_error(normals, truth)
+        seen, _ = scaled_error(irradiance(coeffs, normals), truth)
+        error, _ = scaled_error(irradiance(coeffs, everywhere), irradiance(world, everywhere))
+        rows[prior] = (seen, limit, error, fit)
+        assert seen <= max(HEADROOM * limit, 0.005), (prior, seen, limit)
+        assert fit.negative is None
+    with capsys.disabled():
+        for prior, (seen, limit, error, fit) in rows.items():
+            print(f"\n  chrome-ball world, prior {prior:6s}: seen {100 * seen:.2f} % (limit "
+                  f"{100 * limit:.2f} %), all normals {100 * error:.1f} %, weight "
+                  f"{fit.prior_weight:.3g}")
+    record = scene_data.provenance(scene)
+    assert record["prior"] == "photo" and record["second_file"] == "back.png"
+    # Measured over all normals: mirror 27.2 %, chrome 9.4 %, second photo 9.7 % (seen: 1.06,
+    # 1.13, 1.12× the nine-term limit).
+    assert rows["chrome"][2] < 0.5 * rows["mirror"][2]
+    assert rows["photo"][2] < 0.5 * rows["mirror"][2]
+    # Both balls: the grey ball is one stop under the chrome ball (albedo 0.18 known).
+    _, fit = api.coefficients_from_photo(scene, both_balls["front"], circle_of("PERSP"),
+                                         prior="chrome")
+    record = scene_data.provenance(scene)
+    assert record["chrome"] == "WORLD" and len(record["prior_scale"]) == 3
+    match = api.photo_exposure(scene, fit)
+    assert match.scale == pytest.approx(record["exposure_scale"], rel=1e-9)
+    assert match.scale == pytest.approx(2.0, rel=0.05), match.summary()
+    # Measured: × 2.008 (L00), × 1.996 (seen side); they then differ by 3.3 % on the seen
+    # side, 9.9 % over all normals (the prior's limited weight: the photo's own light wins).
+    assert match.seen < 0.05 and match.everywhere < 0.15, match.summary()
+    # The same chrome ball from its file, not the world: the same numbers.
+    from_file = api.photo_exposure(scene, fit, both_balls["chrome"])
+    assert from_file.scale == pytest.approx(match.scale, rel=1e-6)
+    print(f"\n  both balls: {match.summary()}")
 
 
 def test_round_trip_under_a_real_hdri_is_within_the_nine_term_limit(photos, addon, tmp_path):

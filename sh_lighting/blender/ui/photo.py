@@ -17,6 +17,11 @@ PRIOR_ITEMS = (
     ("mirror", "Mirror", "The unseen side is the seen side mirrored through the plane "
                          "perpendicular to the view axis"),
     ("ambient", "Ambient", "The unseen side is lit by the seen side's mean, a constant"),
+    ("chrome", "Chrome Ball", "The unseen side is lit as a chrome ball of the same place shows "
+                              "(its mirror-ball image, or the world when that is one), scaled "
+                              "to the grey ball"),
+    ("photo", "Second Photo", "The unseen side is lit as a second photo of the ball from "
+                              "another side shows (the same ball and exposure)"),
     ("none", "None", "No prior: the least-squares fit extrapolated (often far off and "
                      "negative on the unseen side; lifted to non-negative light)"),
 )
@@ -78,6 +83,24 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
     sensor_mm: bpy.props.FloatProperty(
         name="Sensor", default=36.0, min=1.0, soft_max=100.0, unit="CAMERA",
         description="Sensor size along the photo's longer side, in mm")
+    chrome_filepath: bpy.props.StringProperty(
+        name="Chrome Ball", subtype="FILE_PATH",
+        description="The chrome ball's mirror-ball image (empty: the scene's world, e.g. the "
+                    "chrome ball set as the world with the Mirror Ball projection)")
+    second_filepath: bpy.props.StringProperty(
+        name="Second Photo", subtype="FILE_PATH",
+        description="A photo of the same grey ball from another side, same exposure")
+    second_circle: bpy.props.FloatVectorProperty(
+        name="Second Circle", size=3, default=(0.0, 0.0, 0.0), min=0.0, soft_max=8192.0,
+        description="The ball in the second photo: centre X and Y (pixels from the top-left "
+                    "corner) and radius, in pixels")
+    second_direction: bpy.props.FloatVectorProperty(
+        name="Second Direction", size=3, default=(0.0, -1.0, 0.0), subtype="DIRECTION",
+        description="World direction the second photo looks along (its lens and projection: "
+                    "the first photo's)")
+    second_roll: bpy.props.FloatProperty(
+        name="Second Roll", default=0.0, subtype="ANGLE",
+        description="Roll of the second photo about its view direction")
     clip: bpy.props.FloatProperty(
         name="Clip Above", default=0.0, min=0.0, soft_max=100.0,
         description="Also leave out pixels with a linear channel at or above this (0: only "
@@ -98,6 +121,11 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
         layout.prop(self, "albedo")
         layout.prop(self, "margin")
         layout.prop(self, "prior")
+        if self.prior == "chrome":
+            layout.prop(self, "chrome_filepath")
+        elif self.prior == "photo":
+            for name in ("second_filepath", "second_circle", "second_direction", "second_roll"):
+                layout.prop(self, name)
         layout.prop(self, "clip")
         layout.prop(self, "camera")
         if self.camera == "DIRECTION":
@@ -113,19 +141,27 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
             self.report({"ERROR"}, "No photo: give the path of the grey ball's photo")
             return {"CANCELLED"}
         direction = tuple(self.direction) if self.camera == "DIRECTION" else None
+        chrome = self.chrome_filepath or None
+        second = (photo.SecondPhoto(self.second_filepath, tuple(self.second_circle),
+                                    direction=tuple(self.second_direction),
+                                    roll=self.second_roll)
+                  if self.prior == "photo" and self.second_filepath else None)
         try:
             _coeffs, fit = photo.coefficients_from_photo(
                 context.scene, self.filepath, tuple(self.circle), direction=direction,
                 roll=self.roll, projection=self.projection, focal_mm=self.focal_mm,
                 sensor_mm=self.sensor_mm, albedo=self.albedo, margin=self.margin,
-                prior=self.prior, clip=self.clip if self.clip > 0.0 else None)
+                prior=self.prior, clip=self.clip if self.clip > 0.0 else None,
+                chrome=chrome, second=second)
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, f"Match Photo: {error}")
             return {"CANCELLED"}
         kind = {"WARNING"} if fit.residual > WARN_RESIDUAL else {"INFO"}
         note = (" (large: is the ball matte and the circle on it?)"
                 if fit.residual > WARN_RESIDUAL else "")
-        self.report(kind, f"SH lighting from the photo: {fit.summary()}{note}")
+        exposure = scene_data.provenance(context.scene).get("exposure_summary")
+        both = f"; {exposure}" if exposure else ""
+        self.report(kind, f"SH lighting from the photo: {fit.summary()}{note}{both}")
         return {"FINISHED"}
 
 
