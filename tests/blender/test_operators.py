@@ -401,6 +401,14 @@ def test_keep_bsdf_on_the_selection_lights_every_material_the_world_lit(addon):
     assert "1 of them beyond the selection" in reports[0][1]
 
 
+def test_panel_lines_fit_the_sidebar():
+    """Each line under Apply reads in full in the sidebar at its default width (a longer one is
+    cut short with "..." by Blender: "SH alone: no lamps, shadows or refl...")."""
+    lines = list(notes.MODE_NOTES.values()) + [
+        notes.TWICE_LINE, notes.LAMPS_LINE.format(count=12)]
+    assert max(map(len, lines)) <= notes.MODE_NOTE_CHARACTERS, lines
+
+
 def test_panel_says_what_the_mode_does_and_what_emission_drops(addon):
     """Issue 23 item 5 / issue 21 item 1: the Mode beside Apply, a line for the engine, a line
     when Emission Only would leave the scene's lamps out (and Apply's report says it)."""
@@ -409,9 +417,9 @@ def test_panel_says_what_the_mode_does_and_what_emission_drops(addon):
     scene_data.store(scene, KNOWN, SCRIPT)
     scene.render.engine = "CYCLES"
     assert notes.status_lines(scene, "KEEP_BSDF") == [
-        ("INFO", "Cycles: SH diffuse, lamps and reflections")]
+        ("INFO", "SH diffuse, lamps, reflections")]
     scene.render.engine = compat.eevee_engine_id()
-    assert "no world reflections" in notes.status_lines(scene, "KEEP_BSDF")[0][1]
+    assert "no reflections" in notes.status_lines(scene, "KEEP_BSDF")[0][1]
     lamp = bpy.data.objects.new("Key", bpy.data.lights.new("Key", "SUN"))
     scene.collection.objects.link(lamp)
     assert ("ERROR", "1 lamp(s) will not light them") in notes.status_lines(scene, "EMISSION")

@@ -8,12 +8,18 @@ import bpy
 from . import world_diffuse
 from .materials import mode_of, scene_materials
 
+# One line each, read in full in the sidebar at its default width (MODE_NOTE_CHARACTERS).
 MODE_NOTES = {
-    ("KEEP_BSDF", "CYCLES"): "Cycles: SH diffuse, lamps and reflections",
-    ("KEEP_BSDF", "EEVEE"): "EEVEE: SH diffuse and lamps, no world reflections",
-    ("EMISSION", "CYCLES"): "SH alone: no lamps, shadows or reflections",
-    ("EMISSION", "EEVEE"): "SH alone: no lamps, shadows or reflections",
+    ("KEEP_BSDF", "CYCLES"): "SH diffuse, lamps, reflections",
+    ("KEEP_BSDF", "EEVEE"): "SH diffuse, lamps; no reflections",
+    ("EMISSION", "CYCLES"): "SH only: no lamps or reflections",
+    ("EMISSION", "EEVEE"): "SH only: no lamps or reflections",
 }
+# Characters of a note line that the sidebar shows beside its icon at its default width
+# (291 px, UI scale 1; "SH alone: no lamps, shadows or refl" was the most that showed).
+MODE_NOTE_CHARACTERS = 34
+LAMPS_LINE = "{count} lamp(s) will not light them"
+TWICE_LINE = "Light counted twice: Apply again"
 
 
 def lamps_of(scene):
@@ -41,10 +47,10 @@ def status_lines(scene, mode):
     and what goes wrong in this scene (lamps Emission drops, light counted twice)."""
     lines = [("INFO", mode_note(mode, scene.render.engine))]
     if mode == "EMISSION" and lamps_of(scene):
-        lines.append(("ERROR", f"{len(lamps_of(scene))} lamp(s) will not light them"))
+        lines.append(("ERROR", LAMPS_LINE.format(count=len(lamps_of(scene)))))
     warning = keep_bsdf_warning(scene)
     if warning is not None:
-        lines.append(("ERROR", "Diffuse light counted twice: Apply again"))
+        lines.append(("ERROR", TWICE_LINE))
     return lines
 
 

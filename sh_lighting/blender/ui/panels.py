@@ -35,6 +35,7 @@ CHANNELS = "RGB"
 SHORT_PHRASES = ("ambient", "±Y", "up/down", "±X", "xy", "yz", "poles", "xz", "x²−y²")
 IRRADIANCE_SCALE = 6.0  # the sphere: 6 UI units (120 px at scale 1)
 CHARACTER_WIDTH = 6.5  # mean width of a UI character in px at scale 1 (Blender's default font)
+CHOICE_LABEL_FACTOR = 0.26  # the label column of Apply To and Mode
 SHOW_CHANNELS = "sh_lighting_show_channels"  # WindowManager: which rows show R, G, B
 
 
@@ -49,6 +50,19 @@ def wrapped(layout, context, text, icon="NONE"):
     for i, line in enumerate(textwrap.wrap(text, chars) or [""]):
         col.label(text=line, icon=icon if i == 0 else ("BLANK1" if icon != "NONE" else "NONE"))
     return col
+
+
+def choice_row(layout, data, prop, label):
+    """An expanded enum with its label in a column of ``CHOICE_LABEL_FACTOR`` of the width:
+    property split leaves the buttons too little room, and "Emission Only" would be cut short
+    at the sidebar's default width."""
+    split = layout.split(factor=CHOICE_LABEL_FACTOR)
+    column = split.column()
+    column.alignment = "RIGHT"
+    column.label(text=label)
+    row = split.row(align=True)
+    row.use_property_split = False
+    row.prop(data, prop, expand=True)
 
 
 def ui_scale(context):
@@ -164,8 +178,8 @@ def draw_main(layout, context):
         sub.active = settings.use_capture_width
         sub.prop(settings, "capture_width", text="")
 
-    layout.prop(settings, "apply_target", expand=True)
-    layout.prop(settings, "apply_mode", expand=True)
+    choice_row(layout, settings, "apply_target", "Apply To")
+    choice_row(layout, settings, "apply_mode", "Mode")
     row = layout.row(align=True)
     row.operator("shlight.apply", text="Apply", icon="MATERIAL")
     row.operator("shlight.remove", text="Remove", icon="X")
