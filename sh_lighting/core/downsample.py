@@ -69,7 +69,8 @@ def block_downsample(pixels, factor, with_bound=False):
     # cores: the product of a k-vector by k rows was 3x slower for k = 2, 2x faster for 16).
     step = max(1, CACHE_VALUES // (k * k * channels)) * k * channels
     dtype = np.result_type(pixels.dtype, np.float32)
-    acc, tmp, dev = (np.empty(min(step, width * channels), dtype=dtype) for _ in range(3))
+    acc, tmp = (np.empty(min(step, width * channels), dtype=dtype) for _ in range(2))
+    dev = np.empty((k, min(step, width * channels)), dtype=dtype) if with_bound else None
     for i in range(out_h):
         r0 = i * k
         w = solid[r0 : r0 + k].astype(dtype)
@@ -96,13 +97,9 @@ def block_downsample(pixels, factor, with_bound=False):
             if with_bound:
                 # Σ_t Ω_t |L_t − L̄_B| of each block: the block means repeated over their columns
                 repeated = np.repeat(mean.astype(dtype), k, axis=0).reshape(-1)
-                spread = dev[:n]
-                spread[:] = 0.0
-                for r in range(k):
-                    np.subtract(flat[r], repeated, out=t)
-                    np.abs(t, out=t)
-                    t *= w[r]
-                    spread += t
-                bound += diameter[i] * spread.reshape(-1, channels)[:, :3].sum(axis=0,
-                                                                             dtype=np.float64)
+                spread = dev[:, :n]
+                np.subtract(flat, repeated, out=spread)
+                np.abs(spread, out=spread)
+                bound += diameter[i] * (w @ spread).reshape(-1, channels)[:, :3].sum(
+                    axis=0, dtype=np.float64)
     return out, bound

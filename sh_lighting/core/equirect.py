@@ -98,15 +98,21 @@ def texel_solid_angles(height, width):
     return (2.0 * pi / width) * 2.0 * np.sin(row_centres(height)) * np.sin(half)
 
 
-def texel_directions(height, width, rows=slice(None)):
+def texel_directions(height, width, rows=slice(None), at=None):
     """Unit direction of each texel centre, shape (H, W, 3), rows top to bottom.
 
     ``rows``: a slice of the rows to compute, e.g. ``slice(r0, r1)`` gives
-    ``texel_directions(height, width)[r0:r1]`` without computing the other rows.
+    ``texel_directions(height, width)[r0:r1]`` without computing the other rows. ``at``:
+    (row, column) index arrays into those rows: only these texels' directions, (N, 3), the
+    same values as ``texel_directions(height, width, rows)[at]``.
     """
     theta = row_centres(height)[rows, None]
     phi = column_centres(width)[None, :]
     sin_t = np.sin(theta)
+    if at is not None:
+        r, c = at
+        return np.stack([sin_t[r, 0] * np.cos(phi)[0, c], sin_t[r, 0] * np.sin(phi)[0, c],
+                         np.cos(theta)[r, 0]], axis=-1)
     return np.stack(
         np.broadcast_arrays(sin_t * np.cos(phi), sin_t * np.sin(phi), np.cos(theta)), axis=-1
     )

@@ -159,12 +159,20 @@ def _bracketed_median(values, weights):
     return float(inside_v[order][index])
 
 
-def _luminance(pixels, luminance):
+LUMINANCE_ROWS = 256  # rows of Y computed at a time
+
+
+def _luminance(pixels, luminance, out=None, rows=slice(None)):
     """Y = RGB · ``luminance`` of every texel, float64 (H, W), in blocks of rows (no float64
-    copy of the whole image)."""
-    out = np.empty(pixels.shape[:2])
-    for r0 in range(0, pixels.shape[0], 256):
-        out[r0 : r0 + 256] = pixels[r0 : r0 + 256, :, :3].astype(np.float64) @ luminance
+    copy of the whole image). ``out``, ``rows``: recompute in ``out`` only the blocks that
+    hold those rows (the same blocks, so the same values, as a whole new Y)."""
+    height = pixels.shape[0]
+    out = np.empty(pixels.shape[:2]) if out is None else out
+    first, last, _ = rows.indices(height)
+    start = first // LUMINANCE_ROWS * LUMINANCE_ROWS
+    for r0 in range(start, last, LUMINANCE_ROWS):
+        r1 = r0 + LUMINANCE_ROWS
+        out[r0:r1] = pixels[r0:r1, :, :3].astype(np.float64) @ luminance
     return out
 
 
@@ -189,30 +197,47 @@ def light_irradiance(lights, normals):
     return total
 
 
+NEIGHBOUR_ROWS = np.array([-1, -1, -1, 0, 0, 1, 1, 1])
+NEIGHBOUR_COLUMNS = np.array([-1, 0, 1, -1, 1, -1, 0, 1])
+
+
+def _neighbours(rows, columns, shape, touches_top, touches_bottom):
+    """(rows, columns) of the 8-neighbours of texels (``rows``, ``columns``) in an equirect
+    band of rows of ``shape``, wrapping in longitude, and across a pole (the texel half a turn
+    away in the same row) where the band ``touches_top`` or ``touches_bottom`` of the map.
+    Repeats are kept."""
+    height, width = shape
+    r = (rows[:, None] + NEIGHBOUR_ROWS).ravel()
+    c = ((columns[:, None] + NEIGHBOUR_COLUMNS) % width).ravel()
+    inside = (r >= 0) & (r < height)
+    r, c = [r[inside]], [c[inside]]
+    for touches, row in ((touches_top, 0), (touches_bottom, height - 1)):
+        at_pole = rows == row
+        if touches and at_pole.any():
+            r.append(rows[at_pole])
+            c.append((columns[at_pole] + width // 2) % width)
+    return np.concatenate(r), np.concatenate(c)
+
+
 def _dilate(region, touches_top, touches_bottom):
     """8-neighbour dilation on an equirect band of rows, wrapping in longitude and at the poles."""
     out = region.copy()
-    out[1:] |= region[:-1]
-    out[:-1] |= region[1:]
-    rows = out.copy()
-    out |= np.roll(rows, 1, axis=1) | np.roll(rows, -1, axis=1)
-    half = region.shape[1] // 2
-    if touches_top:  # across the north pole: the texel half a turn away
-        out[0] |= np.roll(region[0], half)
-    if touches_bottom:
-        out[-1] |= np.roll(region[-1], half)
+    out[_neighbours(*np.nonzero(region), region.shape, touches_top, touches_bottom)] = True
     return out
 
 
 def _connected(mask, seed, touches_top, touches_bottom):
-    """The 8-connected component of ``mask`` that contains ``seed`` (row, column)."""
+    """The 8-connected component of ``mask`` that contains ``seed`` (row, column), grown from
+    its newest texels only (the work is that of the component, not of the band per step)."""
     region = np.zeros_like(mask)
     region[seed] = True
-    while True:
-        grown = _dilate(region, touches_top, touches_bottom) & mask
-        if np.array_equal(grown, region):
-            return region
-        region = grown
+    rows, columns = np.array([seed[0]]), np.array([seed[1]])
+    while rows.size:
+        r, c = _neighbours(rows, columns, mask.shape, touches_top, touches_bottom)
+        new = mask[r, c] & ~region[r, c]
+        region[r[new], c[new]] = True
+        rows, columns = np.divmod(np.unique(r[new] * mask.shape[1] + c[new]), mask.shape[1])
+    return region
 
 
 def _find_source(rgb, lum, solid, contrast, background, min_power, total, peak_fraction,
@@ -238,23 +263,24 @@ def _find_source(rgb, lum, solid, contrast, background, min_power, total, peak_f
     r1 = int(np.searchsorted(edges, theta + reach, side="left"))
     r0, r1 = max(r0, 0), min(r1, height)
     band = slice(r0, r1)
-    band_rgb = rgb[band].astype(np.float64)  # only the searched rows in float64
+    band_rgb = rgb[band]  # only the texels of the region and its ring are cast to float64
     limit = f"the size limit of {degrees(2.0 * max_radius):.0f}°"
     region = _connected(lum[band] > max(floor, peak_fraction * peak), (seed[0] - r0, seed[1]),
                         r0 == 0, r1 == height)
     if (r0 > 0 and region[0].any()) or (r1 < height and region[-1].any()):
         return None, (TOO_LARGE, f"the brightest source left is wider than {limit}")
     ring = _dilate(_dilate(region, r0 == 0, r1 == height), r0 == 0, r1 == height) & ~region
-    fill = np.median(band_rgb[ring], axis=0) if ring.any() else np.zeros(3)
-    weights = np.broadcast_to(solid[band, None], region.shape)[region]
-    inside = band_rgb[region]
+    fill = np.median(band_rgb[ring].astype(np.float64), axis=0) if ring.any() else np.zeros(3)
+    at = np.nonzero(region)  # row-major, as boolean indexing
+    weights = solid[band][at[0]]
+    inside = band_rgb[at].astype(np.float64)
     excess = (inside - np.minimum(inside, fill)) * weights[:, None]  # (N, 3) radiance × dΩ
     power = excess.sum(axis=0)
     share = float(power @ luminance) / total
     if float(power @ luminance) < min_power or not share > 0.0:
         return None, (TOO_DIM, f"the brightest source left carries {100 * share:.2g} % of the "
                       f"light, less than {100 * min_power / total:.2g} %")
-    directions = texel_directions(height, width, band)[region]
+    directions = texel_directions(height, width, band, at)
     moment = excess.T @ directions  # (3 channels, 3): m per channel
     toward = luminance @ moment
     toward = toward / np.linalg.norm(toward)
@@ -284,8 +310,21 @@ def remove_light(pixels, light):
     if a.shape[:2] != light.mask.shape:
         raise ValueError(f"the light was found in a {light.mask.shape} map, not {a.shape[:2]}")
     out = np.array(a, copy=True)
-    out[light.mask, :3] = np.minimum(out[light.mask, :3], light.background)
+    _take_out(out, light)
     return out
+
+
+def _mask_rows(mask):
+    """The slice of the rows from the first to the last that ``mask`` (H, W) touches."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    return slice(int(rows[0]), int(rows[-1]) + 1) if rows.size else slice(0, 0)
+
+
+def _take_out(pixels, light):
+    """``remove_light`` in place, on the rows of the light's mask only."""
+    band = _mask_rows(light.mask)
+    view, mask = pixels[band], light.mask[band]
+    view[mask, :3] = np.minimum(view[mask, :3], light.background)
 
 
 def real_number(value):
@@ -326,6 +365,8 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
     background = weighted_median(lum, solid[:, None])
     reference = downsampled_reference(a, n)[0]  # within 1e-3 of the power at 8K (bench_sizes)
     rest = np.array(a, dtype=np.float32, copy=True)
+    if a.dtype != rest.dtype:  # else the same values: the same Y
+        lum = _luminance(rest, luminance)  # the rest's Y, updated where a light is taken out
     coeffs = project_equirect(rest)
     power = total_power(coeffs)
     lights = []
@@ -340,24 +381,28 @@ def extract_lights(pixels, count=MAX_COUNT, error_target=None, contrast=CONTRAST
         if not total > 0.0:
             stop = (DARK, "the image has no light")
             break
-        found, why = _find_source(rest[..., :3], _luminance(rest, luminance), solid, contrast, background,
+        found, why = _find_source(rest[..., :3], lum, solid, contrast, background,
                                   min_power_fraction * total, total, peak_fraction,
                                   max_radius, luminance)
         if found is None:
             stop = why
             break
         light = _as_light(found, total, luminance)
-        trial_rest = remove_light(rest, light)
-        trial = project_equirect(trial_rest)
+        band = _mask_rows(light.mask)  # taken out in place, put back if it does not help
+        saved = rest[band].copy()
+        _take_out(rest, light)
+        trial = project_equirect(rest)
         estimate = irradiance(trial, n) + light_irradiance([*lights, light], n)
         error = relative_errors(estimate, reference, power)
         if error[0] >= errors[-1][0]:  # e.g. the halo around a sun
+            rest[band] = saved
             stop = (NO_GAIN, f"the next source ({100 * light.power_fraction:.2g} % of the "
                     f"light, {degrees(light.angular_diameter):.0f}° across) would not lower "
                     "the error: it stays in the SH")
             break
         lights.append(light)
-        rest, coeffs = trial_rest, trial
+        coeffs = trial
+        _luminance(rest, luminance, lum, band)
         errors.append(error)
     size = stop[2] if len(stop) > 2 else 0.0
     return Extraction(lights, rest, coeffs, errors, stop[0], stop[1], float(max_radius), size)

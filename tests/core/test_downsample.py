@@ -64,3 +64,23 @@ def test_the_estimate_of_a_wide_map_is_within_its_bound_of_the_full_resolution_o
     assert small["reference_size"] == (32, 64) and 0.0 < small["bound"] < 0.2
     assert abs(small["mean"] - full["mean"]) <= small["bound"]
     assert abs(small["max"] - full["max"]) <= small["bound"]
+
+
+@pytest.mark.parametrize("factor", [2, 3, 8])
+def test_the_bound_is_the_sum_of_the_module_docstring_in_float64(factor):
+    """block_downsample sums Σ_B d_B Σ_t Ω_t |L_t − L̄_B| in float32 row blocks (a product of
+    the row weights by the deviations); the same sum written out in float64 agrees."""
+    px = sky(48, 96, seed=11)[::-1]
+    small, bound = block_downsample(px, factor, with_bound=True)
+    k, (h, w) = factor, px.shape[:2]
+    solid = texel_solid_angles(h, w)
+    edges = np.linspace(0.0, np.pi, h // k + 1)
+    widest = np.maximum(np.sin(edges[:-1]), np.sin(edges[1:]))
+    widest = np.where((edges[:-1] <= 0.5 * np.pi) & (edges[1:] >= 0.5 * np.pi), 1.0, widest)
+    diameter = np.minimum(np.pi, np.pi / (h // k) + widest * min(2.0 * np.pi * k / w, np.pi))
+    blocks = px[..., :3].astype(np.float64).reshape(h // k, k, w // k, k, 3)
+    omega = solid.reshape(h // k, k)[:, :, None, None, None]
+    mean = (blocks * omega).sum(axis=(1, 3)) / (solid.reshape(h // k, k).sum(axis=1) * k)[:, None, None]
+    np.testing.assert_allclose(small, mean, rtol=1e-6)
+    spread = (omega * np.abs(blocks - mean[:, None, :, None])).sum(axis=(1, 2, 3))
+    np.testing.assert_allclose(bound, (diameter[:, None] * spread).sum(axis=0), rtol=1e-5)

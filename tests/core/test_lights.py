@@ -121,3 +121,67 @@ def test_a_world_without_blue_and_a_black_world_extract():
     black = core_lights.extract_lights(np.zeros((HEIGHT, WIDTH, 3), np.float32), count=2)
     assert black.lights == [] and black.errors == [(0.0, 0.0)]
     assert black.stop_kind == core_lights.DARK and black.stop == "the image has no light"
+
+
+def _dilated_by_rolls(region, touches_top, touches_bottom):
+    """The 8-neighbour dilation of a whole band by shifted copies (the slow reference)."""
+    out = region.copy()
+    out[1:] |= region[:-1]
+    out[:-1] |= region[1:]
+    rows = out.copy()
+    out |= np.roll(rows, 1, axis=1) | np.roll(rows, -1, axis=1)
+    half = region.shape[1] // 2
+    if touches_top:
+        out[0] |= np.roll(region[0], half)
+    if touches_bottom:
+        out[-1] |= np.roll(region[-1], half)
+    return out
+
+
+@pytest.mark.parametrize("width", [24, 25])
+def test_the_component_grown_from_its_newest_texels_is_that_of_whole_band_dilations(width):
+    """_connected grows only from the texels found last; it must give the component that
+    repeated dilations of the whole band give, across the longitude seam and the poles."""
+    rng = np.random.default_rng(7)
+    for trial in range(40):
+        mask = rng.random((9, width)) < 0.45
+        top, bottom = bool(trial % 2), bool(trial % 3 == 0)
+        seed = (int(rng.integers(9)), int(rng.integers(width)))
+        mask[seed] = True
+        expected = np.zeros_like(mask)
+        expected[seed] = True
+        while True:
+            grown = _dilated_by_rolls(expected, top, bottom) & mask
+            if np.array_equal(grown, expected):
+                break
+            expected = grown
+        assert np.array_equal(core_lights._connected(mask, seed, top, bottom), expected)
+        assert np.array_equal(core_lights._dilate(expected, top, bottom),
+                              _dilated_by_rolls(expected, top, bottom))
+
+
+def test_the_luminance_updated_in_row_blocks_is_a_whole_new_one():
+    rng = np.random.default_rng(3)
+    pixels = rng.random((600, 40, 4), dtype=np.float32)
+    weights = np.array([0.2126, 0.7152, 0.0722])
+    lum = core_lights._luminance(pixels, weights)
+    pixels[300:310, 5:9, :3] = 0.5
+    core_lights._luminance(pixels, weights, lum, slice(300, 310))
+    assert np.array_equal(lum, core_lights._luminance(pixels, weights))
+
+
+def test_a_light_that_does_not_help_leaves_the_rest_as_the_map():
+    """Lights are taken out of the rest in place while they are tried: one refused (a halo,
+    NO_GAIN) or none found must leave the rest equal to the input."""
+    pixels = disc_world(TWO_SUNS)
+    # at a normal perpendicular to the first sun the second one does not lower the error
+    side = np.array([[1.0, 0.0, -1.0]]) / np.sqrt(2.0)
+    for count, normals, kind in ((0, None, "COUNT"), (1, None, "COUNT"), (4, None, "CONTRAST"),
+                                 (4, side, "NO_GAIN")):
+        result = core_lights.extract_lights(pixels, count=count, normals=normals)
+        assert result.stop_kind == kind and len(result.lights) == min(count, 2 - (kind == "NO_GAIN"))
+        rest = pixels.copy()
+        for light in result.lights:
+            rest = core_lights.remove_light(rest, light)
+        assert np.array_equal(result.rest, rest)
+        assert np.array_equal(result.coefficients, project_equirect(rest))
