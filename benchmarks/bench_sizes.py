@@ -54,7 +54,8 @@ def sky(height, width):
     for r0 in range(0, height, 256):
         theta = row_centres(height)[r0 : r0 + 256, None].astype(np.float32)
         st, ct = np.sin(theta), np.cos(theta)
-        dot = st * np.cos(phi) * 0.5 + st * np.sin(phi) * 0.3 + ct * 0.81
+        sx, sy, sz = np.array([0.5, 0.3, 0.81]) / np.linalg.norm([0.5, 0.3, 0.81])  # unit: the
+        dot = st * np.cos(phi) * sx + st * np.sin(phi) * sy + ct * sz  # sun is in the map
         sun = np.exp(np.minimum((dot - 1.0) / 4e-5, 0.0)) * 3e4
         up = np.clip(ct, 0.0, None)
         block = px[r0 : r0 + 256]

@@ -24,6 +24,7 @@ from math import gcd, pi
 import numpy as np
 
 from .equirect import texel_solid_angles
+from .projection import THREADED_TEXELS, thread_count, thread_pool
 
 CACHE_VALUES = 1 << 20  # input values handled at a time (4 MB of float32; 64K: 2x slower at 8K,
 #                          from numpy call overhead)
@@ -45,33 +46,51 @@ def block_downsample(pixels, factor, with_bound=False):
     H and W) with solid-angle weights, as float64 (H/k, W/k, 3); ``bound`` the (3,)
     ``variation_bound`` of the module docstring (None unless ``with_bound``).
 
-    Works one block row (k input rows) at a time in float32, so it adds no copy of the image.
+    Works one block row (k input rows) at a time in float32, so it adds no copy of the image;
+    the block rows are shared out between threads in bands (``projection.thread_pool``), and
+    each block row's share of the bound is kept apart and summed in order at the end, so the
+    result does not depend on the number of threads.
     """
     height, width = pixels.shape[:2]
-    channels = pixels.shape[2]
     k = int(factor)
     if k < 1 or height % k or width % k:
         raise ValueError(f"a downsample factor must divide {height}x{width}, got {factor!r}")
-    out_h, out_w = height // k, width // k
+    if pixels.strides[0] < 0:  # a flipped view (Blender's readback): the same rows upwards;
+        out, bound = block_downsample(pixels[::-1], k, with_bound)  # Ω_i and d_B are symmetric
+        return out[::-1], bound
+    out_h = height // k
+    out = np.empty((out_h, width // k, 3))
+    shares = np.zeros((out_h, 3)) if with_bound else None
+    threads = thread_count(out_h, 1) if height * width >= THREADED_TEXELS else 1
+    bands = np.linspace(0, out_h, threads + 1).astype(int)
+    work = [(pixels, k, out, shares, i0, i1) for i0, i1 in zip(bands, bands[1:])]
+    if len(work) == 1:
+        _downsample_band(*work[0])
+    else:
+        pool = thread_pool(len(work))
+        for done in [pool.submit(_downsample_band, *w) for w in work]:
+            done.result()
+    return out, (shares.sum(axis=0) if with_bound else None)
+
+
+def _downsample_band(pixels, k, out, shares, i0, i1):
+    """Fill out[i0:i1] (and shares[i0:i1], the bound's share of each block row, if not None)."""
+    height, width, channels = pixels.shape
+    out_h = height // k
     solid = texel_solid_angles(height, width)
-    out = np.empty((out_h, out_w, 3))
-    bound = np.zeros(3) if with_bound else None
     # angular diameter of a block row's blocks: Δθ + (widest sin θ) · min(Δφ, π)
     edges = np.linspace(0.0, pi, out_h + 1)
     widest = np.maximum(np.sin(edges[:-1]), np.sin(edges[1:]))
     widest = np.where((edges[:-1] <= 0.5 * pi) & (edges[1:] >= 0.5 * pi), 1.0, widest)
     diameter = np.minimum(pi, pi / out_h + widest * min(2.0 * pi * k / width, pi))
-    if pixels.strides[0] < 0:  # a flipped view (Blender's readback): the same rows upwards;
-        out, bound = block_downsample(pixels[::-1], k, with_bound)  # Ω_i and d_B are symmetric
-        return out[::-1], bound
     # blocks of columns small enough for the core's cache: CACHE_VALUES floats of k rows.
     # In-place arithmetic rather than matrix products where that measured faster (2 loaded
     # cores: the product of a k-vector by k rows was 3x slower for k = 2, 2x faster for 16).
     step = max(1, CACHE_VALUES // (k * k * channels)) * k * channels
     dtype = np.result_type(pixels.dtype, np.float32)
     acc, tmp = (np.empty(min(step, width * channels), dtype=dtype) for _ in range(2))
-    dev = np.empty((k, min(step, width * channels)), dtype=dtype) if with_bound else None
-    for i in range(out_h):
+    dev = np.empty((k, min(step, width * channels)), dtype=dtype) if shares is not None else None
+    for i in range(i0, i1):
         r0 = i * k
         w = solid[r0 : r0 + k].astype(dtype)
         area = float(solid[r0 : r0 + k].sum(dtype=np.float64)) * k
@@ -94,12 +113,11 @@ def block_downsample(pixels, factor, with_bound=False):
                 mean += columns[:, j]
             mean /= area
             out[i, b0 : b0 + blocks] = mean[:, :3]
-            if with_bound:
+            if shares is not None:
                 # Σ_t Ω_t |L_t − L̄_B| of each block: the block means repeated over their columns
                 repeated = np.repeat(mean.astype(dtype), k, axis=0).reshape(-1)
                 spread = dev[:, :n]
                 np.subtract(flat, repeated, out=spread)
                 np.abs(spread, out=spread)
-                bound += diameter[i] * (w @ spread).reshape(-1, channels)[:, :3].sum(
+                shares[i] += diameter[i] * (w @ spread).reshape(-1, channels)[:, :3].sum(
                     axis=0, dtype=np.float64)
-    return out, bound

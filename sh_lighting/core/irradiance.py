@@ -18,6 +18,7 @@ import numpy as np
 from .coefficients import check_coefficients as checked_coefficients
 from .downsample import block_downsample, whole_factor
 from .equirect import check_finite_pixels, check_pixels, column_centres
+from .projection import thread_count, thread_pool
 from .sh import band_of_each_coefficient, lambert_band_factors, order_of, sh_basis, spread_normals
 from .texel_cosine import clamped_cosine_integral, texel_moments
 
@@ -40,6 +41,9 @@ TERM_PEAKS = np.array(
 CHUNK_VALUES = 1 << 22
 # Texel-normal pairs given to the exact kernel at a time (its temporaries: ~100 MB).
 KERNEL_PAIRS = 1 << 17
+# Threads for the reference: from this many texel-normal pairs, at least this many normals each.
+THREADED_PAIRS = 1 << 24
+NORMALS_PER_THREAD = 32
 # error_estimate's reference: maps wider than this are box-downsampled to about this width.
 ESTIMATE_WIDTH = 512
 
@@ -111,7 +115,8 @@ def reference_irradiance(pixels, normals):
     V̂) take the exact kernel ``clamped_cosine_integral``. Texel (i, j) has V = (A_i cos φ_j,
     A_i sin φ_j, B_i), so in each row the texels above the horizon are one arc of columns and
     their sum is A_i (n_x Σ L cos φ + n_y Σ L sin φ) + B_i n_z Σ L, from running sums along
-    the row: O(texels + rows × normals + crossing texels), float64, in blocks of rows.
+    the row: O(texels + rows × normals + crossing texels), float64, in blocks of rows, the
+    normals shared out between threads (``projection.thread_pool``).
     """
     a = check_pixels(pixels)
     n = _check_normals(normals)
@@ -120,6 +125,25 @@ def reference_irradiance(pixels, normals):
     flat_n = n.reshape(-1, 3)
     lengths = np.linalg.norm(flat_n, axis=-1)
     flat_n = flat_n / np.where(lengths > 0.0, lengths, 1.0)[:, None]  # E is linear in |n|
+    rows = max(1, CHUNK_VALUES // (9 * max(width + 1, flat_n.shape[0])))
+    # the normals are shared out between threads (each normal's E is its own sum)
+    count = flat_n.shape[0]
+    threads = (thread_count(count, NORMALS_PER_THREAD)
+               if height * width * count >= THREADED_PAIRS else 1)
+    bands = np.linspace(0, count, threads + 1).astype(int)
+    work = [(a, flat_n[n0:n1], rows) for n0, n1 in zip(bands, bands[1:])]
+    if len(work) == 1:
+        result = _reference_sums(*work[0])
+    else:
+        pool = thread_pool(len(work))
+        result = np.concatenate([done.result() for done in
+                                 [pool.submit(_reference_sums, *w) for w in work]])
+    return (result * lengths[:, None]).reshape(n.shape[:-1] + (3,))
+
+
+def _reference_sums(a, flat_n, rows):
+    """``reference_irradiance`` of unit normals ``flat_n`` (N, 3), ``rows`` rows at a time."""
+    height, width, _ = a.shape
     theta = np.linspace(0.0, pi, height + 1)
     z_edges = np.cos(theta)
     phi_edges = pi - (2.0 * pi / width) * np.arange(width + 1)  # column j: [phi_edges[j+1], [j]]
@@ -127,7 +151,6 @@ def reference_irradiance(pixels, normals):
     edge = _horizon_margin(theta, width, first_column)  # (H,): |n · V| ≤ edge may cross
     phi = column_centres(width)
     trig = np.stack([np.ones(width), np.cos(phi), np.sin(phi)], axis=-1)  # (W, 3)
-    rows = max(1, CHUNK_VALUES // (9 * max(width + 1, flat_n.shape[0])))
     result = np.zeros((flat_n.shape[0], 3))
     x, y, z = (flat_n[:, k, None, None] for k in range(3))
     for r0 in range(0, height, rows):
@@ -158,7 +181,7 @@ def reference_irradiance(pixels, normals):
                 result[:, channel] += np.bincount(
                     pair_n, kernel * radiance[row, col, channel], minlength=flat_n.shape[0]
                 )
-    return (result * lengths[:, None]).reshape(n.shape[:-1] + (3,))
+    return result
 
 
 def _horizon_margin(theta, width, first_column):

@@ -123,13 +123,13 @@ def column_sums(pixels, max_order=2, zero_nonfinite=False):
     height, width = pixels.shape[:2]
     weights = _stacked_column_weights(width, max_order)
     sums = np.empty((height, weights.shape[0], 3))
-    threads = _thread_count(height) if height * width >= THREADED_TEXELS else 1
+    threads = thread_count(height) if height * width >= THREADED_TEXELS else 1
     bands = np.linspace(0, height, threads + 1).astype(int)
     work = [(pixels, weights, sums, r0, r1, zero_nonfinite) for r0, r1 in zip(bands, bands[1:])]
     if len(work) == 1:
         _band_column_sums(*work[0])
     else:
-        pool = _pool(len(work))
+        pool = thread_pool(len(work))
         for done in [pool.submit(_quiet_band_column_sums, *w) for w in work]:
             done.result()
     return sums
@@ -148,20 +148,22 @@ def _stacked_column_weights(width, max_order):
 _POOLS = {}
 
 
-def _pool(threads):
-    """One long-lived pool of ``threads`` workers (starting threads per call cost ~0.5 ms)."""
+def thread_pool(threads):
+    """One long-lived pool of ``threads`` workers (starting threads per call cost ~0.5 ms),
+    shared by the passes over the pixels (also ``downsample``, ``irradiance``)."""
     if threads not in _POOLS:
         _POOLS[threads] = ThreadPoolExecutor(threads, thread_name_prefix="sh_projection")
     return _POOLS[threads]
 
 
-def _thread_count(height):
-    """One thread per available core, at most MAX_THREADS, and none without a block of rows."""
+def thread_count(height, rows_per_thread=ROWS_PER_BLOCK):
+    """One thread per available core, at most MAX_THREADS, and none without
+    ``rows_per_thread`` rows (a block of rows)."""
     try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # not Linux
         cores = os.cpu_count() or 1
-    return max(1, min(cores, MAX_THREADS, height // ROWS_PER_BLOCK))
+    return max(1, min(cores, MAX_THREADS, height // rows_per_thread))
 
 
 def _quiet_band_column_sums(*args):

@@ -84,3 +84,28 @@ def test_the_bound_is_the_sum_of_the_module_docstring_in_float64(factor):
     np.testing.assert_allclose(small, mean, rtol=1e-6)
     spread = (omega * np.abs(blocks - mean[:, None, :, None])).sum(axis=(1, 2, 3))
     np.testing.assert_allclose(bound, (diameter[:, None] * spread).sum(axis=0), rtol=1e-5)
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_the_threads_change_neither_the_map_nor_its_reference(monkeypatch, threads):
+    """block_downsample shares block rows and reference_irradiance normals between threads:
+    the map and bound are the same bit for bit, E the same to rounding."""
+    import importlib
+
+    from sh_lighting.core import downsample, projection
+
+    irradiance = importlib.import_module("sh_lighting.core.irradiance")  # not the function
+    px = sky(96, 192, seed=2)
+    n = spread_normals(100)
+    monkeypatch.setattr(downsample, "THREADED_TEXELS", 1 << 40)
+    monkeypatch.setattr(irradiance, "THREADED_PAIRS", 1 << 40)
+    small, bound = block_downsample(px, 3, with_bound=True)
+    exact = reference_irradiance(small, n)
+    monkeypatch.setattr(downsample, "THREADED_TEXELS", 1)
+    monkeypatch.setattr(irradiance, "THREADED_PAIRS", 1)
+    monkeypatch.setattr(irradiance, "NORMALS_PER_THREAD", 8)
+    monkeypatch.setattr(projection, "MAX_THREADS", threads)
+    monkeypatch.setattr(projection.os, "sched_getaffinity", lambda _pid: range(threads))
+    again, same_bound = block_downsample(px, 3, with_bound=True)
+    assert np.array_equal(again, small) and np.array_equal(same_bound, bound)
+    np.testing.assert_allclose(reference_irradiance(small, n), exact, rtol=1e-14)

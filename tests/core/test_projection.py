@@ -133,7 +133,7 @@ def test_memory_stays_bounded_on_a_16k_map():
     assert peak < 1 << 30, f"peak extra memory {peak / 2**20:.0f} MiB"
     # By design one float64 block of rows per thread (measured 50 MiB on 2 cores).
     block = projection.ROWS_PER_BLOCK * 3 * 16384 * 8
-    assert peak < projection._thread_count(8192) * block + (16 << 20)
+    assert peak < projection.thread_count(8192) * block + (16 << 20)
     assert coeffs[0] == pytest.approx(2.0 * sqrt(pi) * 0.5, rel=1e-12)
     assert np.abs(coeffs[1:]).max() < ROUNDING
 
