@@ -54,7 +54,7 @@ def apply_and_save(args, preset, out):
     from .. import api
     from ..blender import scene_data
     from ..blender.presets import files as preset_io
-    from ..blender.shading import materials
+    from ..blender.shading import materials, notes
     from ..formats.presets import PresetError
 
     open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
@@ -81,6 +81,9 @@ def apply_and_save(args, preset, out):
         )
     say(f"SH lighting applied to {len(result.changed)} material(s): "
         + ", ".join(result.changed))
+    if args.mode == "KEEP_BSDF":
+        for line in notes.shared_scene_notes(scene, result.changed):
+            say(f"warning: {line}")
     try:
         save_blend(out, overwrite=args.in_place or args.overwrite)
     except (OSError, RuntimeError) as error:

@@ -169,3 +169,36 @@ def test_world_switched_after_apply_is_named_by_the_status_line(sphere):
     s.scene.world = bpy.data.worlds.new("Another")
     warning = notes.keep_bsdf_warning(s.scene)
     assert warning is not None and "'Another'" in warning and "Apply" in warning
+
+
+def test_a_second_scene_sharing_the_material_is_counted_once_and_told_what_it_lacks(
+        sphere, addon):
+    """Issue 20 item 8: Apply (Keep BSDF) in one scene, the material also shown in a second
+    scene with its own world and no coefficients. That world stops giving diffuse light too
+    (no double count), and Apply says in its report what that scene then lacks."""
+    from blender_scenes import run_execute
+
+    from sh_lighting.blender.ui.operators import SHLIGHT_OT_apply
+
+    s = sphere
+    other = bpy.data.scenes.new("Second")
+    other.world = bpy.data.worlds.new("Second World")
+    other.collection.objects.link(s.sphere)
+    plane = bpy.data.objects.new("Own", s.plane.data.copy())
+    plane.data.materials[0] = diffuse_material("Own Grey", (0.5, 0.5, 0.5))
+    other.collection.objects.link(plane)
+    result, reports = run_execute(SHLIGHT_OT_apply)
+    assert result == {"FINISHED"}
+    assert materials.mode_of(s.sphere.data.materials[0]) == "KEEP_BSDF"
+    assert other.world.evaluated_get(bpy.context.evaluated_depsgraph_get()) \
+        .cycles_visibility.diffuse is False
+    (kinds, message), = reports
+    assert kinds == {"WARNING"}
+    assert ("scene 'Second' shows 1 of these material(s), so its world 'Second World' gives no "
+            "diffuse light there either, but it has no SH coefficients (Compute there) and its "
+            "1 other material(s) ('Own Grey') have no SH (Apply there)") in message
+    api.set_coefficients(other, api.get_coefficients(s.scene))
+    materials.apply_to_materials([plane.data.materials[0]], other)
+    assert notes.shared_scene_notes(s.scene, [s.sphere.data.materials[0].name]) == []
+    materials.remove_from_materials(bpy.data.materials)
+    assert other.world.cycles_visibility.diffuse is True

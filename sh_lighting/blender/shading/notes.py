@@ -5,6 +5,7 @@ item 5). Whatever a mode cannot do is said where it matters, never silently drop
 
 import bpy
 
+from .. import scene_data
 from . import world_diffuse
 from .materials import mode_of, scene_materials
 
@@ -71,3 +72,33 @@ def keep_bsdf_warning(scene):
             "material(s) also get from SH (counted twice): click Apply again")
 
 
+
+
+def shared_scene_notes(scene, names):
+    """One line per other scene that shows one of the "KEEP_BSDF" materials ``names``
+    (applied from ``scene``), where that scene is not lit as it is in ``scene``.
+
+    The materials' SH term reads the coefficients of the scene being rendered, and Apply has
+    switched that scene's world's diffuse light off too (counted once): so a scene without
+    coefficients gets no diffuse light from its world at all on them, and its other materials
+    none on theirs. Nothing for scenes where both are in place.
+    """
+    wanted = set(names)
+    lines = []
+    for other in bpy.data.scenes:
+        shown = sorted(wanted & scene_materials(other))
+        if other == scene or not shown or other.world is None:
+            continue
+        missing = []
+        if not scene_data.has_coefficients(other):
+            missing.append("it has no SH coefficients (Compute there)")
+        unlit = [name for name in sorted(scene_materials(other) - wanted)
+                 if mode_of(bpy.data.materials.get(name)) != "KEEP_BSDF"]
+        if unlit:
+            missing.append(f"its {len(unlit)} other material(s) ('{unlit[0]}'"
+                           f"{', ...' if len(unlit) > 1 else ''}) have no SH (Apply there)")
+        if missing:
+            lines.append(f"scene '{other.name}' shows {len(shown)} of these material(s), so its "
+                         f"world '{other.world.name}' gives no diffuse light there either, but "
+                         f"{' and '.join(missing)}")
+    return lines

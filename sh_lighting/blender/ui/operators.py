@@ -179,9 +179,12 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
         lamps = notes.emission_lamp_note(scene) if mode == "EMISSION" else None
         if lamps and changed:
             message += f"; {lamps}"
+        shared = notes.shared_scene_notes(scene, result.changed) if mode == "KEEP_BSDF" else []
+        if shared:
+            message += "; " + "; ".join(shared)
         if bare:
             message += f"; {bare}"
-        warn = ((skipped or bare) and not changed) or (lamps and changed)
+        warn = ((skipped or bare) and not changed) or (lamps and changed) or shared
         self.report({"WARNING"} if warn else {"INFO"}, message)
         return {"FINISHED"}
 
