@@ -226,11 +226,12 @@ def apply_to_materials(materials, scene=None, mode=_materials.DEFAULT_MODE):
     coefficients of ``scene`` (default: the context scene). ``mode``: "KEEP_BSDF" (default:
     the BSDF stays, SH replaces the world's diffuse light, which Cycles then no longer gives
     to diffuse rays) or "EMISSION" (the SH emission alone). Returns which materials were
-    changed and which were skipped, with reasons; a ValueError for an unknown mode.
+    changed and which were skipped, with reasons; a ValueError for an unknown mode. Materials
+    lit by the transfer (``apply_transfer``) keep it, in ``mode``.
     """
     if scene is None:
         scene = bpy.context.scene
-    return _materials.apply_to_materials(_material_list(materials), scene, mode)
+    return _transfer_apply.apply_keeping_transfer(_material_list(materials), scene, mode)[0]
 
 
 def remove_from_materials(materials):

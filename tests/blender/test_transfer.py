@@ -203,6 +203,21 @@ def test_bake_restores_the_scene_settings():
     assert json.loads(ground[bake.RECORD])["samples"] == 8
 
 
+def test_lamps_are_not_baked_into_the_transfer():
+    """T_lm is the response to the world Y_lm alone: a Sun (as Extract Lights makes) is hidden
+    for the bake and shown again, so the bake is the same as without it."""
+    scene, ground, box = _scene(2, 0)
+    _bake([ground], samples=4)
+    plain = np.array([d.color[:] for d in ground.data.color_attributes["sh_T00"].data])
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    sun.data.energy = 10.0
+    scene.collection.objects.link(sun)
+    _bake([ground], samples=4)
+    with_sun = np.array([d.color[:] for d in ground.data.color_attributes["sh_T00"].data])
+    assert np.abs(with_sun - plain).max() < 1e-6, np.abs(with_sun - plain).max()
+    assert not sun.hide_render
+
+
 @pytest.mark.slow
 def test_a_saved_bake_renders_without_the_add_on(tmp_path):
     scene, ground, box = _scene()

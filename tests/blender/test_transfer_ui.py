@@ -7,6 +7,8 @@ import pytest
 
 import blender_scenes as scenes
 import transfer_scenes as ts
+from sh_lighting.blender.shading import materials
+from sh_lighting.blender.transfer import apply as transfer_apply
 from sh_lighting.blender.transfer import bake, nodes
 from sh_lighting.blender.ui import transfer as transfer_ui
 
@@ -100,3 +102,52 @@ def test_apply_transfer_default_mode_matches_path_tracing(addon, tmp_path):
     assert not [n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup"]
     assert material.cycles.emission_sampling == "AUTO"
     assert bake.record(ground) is None and bake.record(box) is None
+
+
+def test_each_remove_restores_only_the_emission_sampling_it_changed(addon):
+    """Apply Transfer and the plain Apply keep the Emission Sampling they replace in the same
+    record, so either Remove (the panel's Remove, Delete Transfer) puts it back, and only
+    while it is still the None they set: a value chosen since is the user's."""
+    scene, ground, box = _scene(2, 0)
+    bake.bake_transfer(scene, [ground, box], samples=1)
+    material = ground.material_slots[0].material
+    material.cycles.emission_sampling = "FRONT"
+    _select([ground, box])
+    assert bpy.ops.shlight.apply_transfer() == {"FINISHED"}
+    assert material.cycles.emission_sampling == "NONE"
+    assert bpy.ops.shlight.remove() == {"FINISHED"}  # the plain Remove
+    assert material.cycles.emission_sampling == "FRONT"
+    assert bpy.ops.shlight.apply() == {"FINISHED"}
+    assert bpy.ops.shlight.apply_transfer() == {"FINISHED"}  # over the plain Apply
+    assert material.cycles.emission_sampling == "NONE"
+    assert bpy.ops.shlight.delete_transfer() == {"FINISHED"}
+    assert material.cycles.emission_sampling == "FRONT"
+    bake.bake_transfer(scene, [ground, box], samples=1)
+    assert bpy.ops.shlight.apply_transfer() == {"FINISHED"}
+    material.cycles.emission_sampling = "BACK"  # the user's choice after Apply
+    assert bpy.ops.shlight.remove() == {"FINISHED"}
+    assert material.cycles.emission_sampling == "BACK"
+    assert not materials.is_applied(material)
+
+
+def test_plain_apply_keeps_the_transfer_and_apply_transfer_follows_the_panels_mode(addon):
+    """Keep BSDF's Apply reaches the whole scene: a plain Apply for an object added later must
+    not take the shadows off the baked ones. Remove, then Apply, gives SH without them."""
+    scene, ground, box = _scene(2, 0)
+    bake.bake_transfer(scene, [ground], samples=1)
+    ground.data.materials[0] = ts.diffuse_material("Ground Grey")
+    scene.sh_lighting.apply_mode = "EMISSION"
+    _select([ground])
+    assert bpy.ops.shlight.apply_transfer() == {"FINISHED"}
+    material = ground.material_slots[0].material
+    assert materials.mode_of(material) == "EMISSION"  # the panel's Mode
+    scene.sh_lighting.apply_mode = "KEEP_BSDF"
+    _select([box])
+    assert bpy.ops.shlight.apply() == {"FINISHED"}  # widened to the whole scene
+    assert materials.mode_of(material) == "KEEP_BSDF"
+    assert transfer_apply.uses_transfer(material)
+    assert not transfer_apply.uses_transfer(box.material_slots[0].material)
+    scene.sh_lighting.apply_target = "ALL"
+    assert bpy.ops.shlight.remove() == {"FINISHED"}
+    assert bpy.ops.shlight.apply() == {"FINISHED"}
+    assert materials.is_applied(material) and not transfer_apply.uses_transfer(material)

@@ -20,7 +20,8 @@ working), and its "Shader" output drives (KEEP_BSDF: is added to) the Surface of
 Output node. The links it replaces are recorded as JSON in the custom property ``NODE_MARKER``
 of the added node (with the mode, the names of the other nodes it added, the inputs it gave
 a Value/RGB node, and the material's Cycles Emission Sampling, set to None: the SH emission
-is reflected light, not a lamp); ``remove_from_materials`` puts all of it back and deletes
+is reflected light, not a lamp); ``remove_from_materials`` puts all of it back (the Emission
+Sampling only if it is still None: a value the user chose since stays) and deletes
 those nodes, and gives each world its diffuse light back once no material of the file is in
 "KEEP_BSDF" mode. Applying to a material that already has the group first removes it, then
 applies it again (a refresh: nothing stacks).
@@ -418,7 +419,9 @@ def _restore(material, node, record):
     tree.nodes.remove(node)
     sampling = record.get("emission_sampling")
     cycles = getattr(material, "cycles", None)
-    if sampling is not None and cycles is not None and hasattr(cycles, "emission_sampling"):
+    if (sampling is not None and cycles is not None
+            and getattr(cycles, "emission_sampling", None) == "NONE"):
+        # Put back only what Apply changed: a value chosen since is the user's.
         cycles.emission_sampling = sampling
     material.update_tag()
 

@@ -5,8 +5,13 @@ from the BSDF, the recorded links, rollback, Remove): the materials are applied 
 mode ("KEEP_BSDF": lamps, shadows and glossy reflections stay, the world's diffuse light is
 replaced; "EMISSION": the transfer alone, exact and noise free at one sample), then each added
 group node is pointed at the "SH Transfer" group (same interface) and marked with
-``NODE_MARKER``. Remove (``materials.remove_from_materials``) undoes it like any Apply; Apply
-again (the plain one) puts "SH Irradiance" back.
+``NODE_MARKER``. Remove (``materials.remove_from_materials``) undoes it like any Apply, the
+Emission Sampling (set to None, Cycles must not sample the SH emission as a light: measured on
+the transfer's test scene 6.4 % too bright, 8.7 % RMSE, with Auto; 0.96 % with None) with the
+rest, since it is kept in the same record. The plain Apply (``apply_keeping_transfer``, the
+panel's Apply and ``api.apply_to_materials``) keeps the transfer where it is, in the mode it
+is given: Keep BSDF applies to the whole scene, and a plain Apply for one new object must not
+take the shadows off the baked ones; Remove takes it out, Apply then gives "SH Irradiance".
 
 Only materials of baked objects are changed. A material also used by an object without a bake
 would give that object no light (its Attribute nodes read 0): such materials are skipped with
@@ -24,8 +29,6 @@ from ..shading import materials
 from . import bake, nodes
 
 NODE_MARKER = "sh_lighting_transfer"
-# Material custom property: its Cycles Emission Sampling before Apply Transfer set it to None.
-SAMPLING_MARKER = "sh_lighting_transfer_emission_sampling"
 MODES = ("KEEP_BSDF", "EMISSION")
 
 
@@ -77,38 +80,39 @@ def apply_transfer(objects, scene, mode="KEEP_BSDF"):
                     "light): bake it too or give it its own material")))
                 continue
             wanted[material.name_full] = material
-    group = nodes.ensure_node_group()
     result = materials.apply_to_materials(list(wanted.values()), scene, mode)
-    for name in result.changed:
-        material = wanted.get(name) or bpy.data.materials.get(name)
-        for node in materials.added_nodes(material):
-            node.node_tree = group
-            node.label = nodes.GROUP_NAME
-            node[NODE_MARKER] = 1
+    use_transfer_group([wanted.get(n) or bpy.data.materials.get(n) for n in result.changed])
     return Result(list(result.changed), skipped + list(result.skipped))
 
 
-def restore_emission_sampling(material):
-    """Put back the Emission Sampling an older Apply Transfer replaced and marked with
-    ``SAMPLING_MARKER`` (once the transfer is out). Apply itself now sets it to None and puts it
-    back (``materials``: Cycles must not sample the SH emission as a light; measured on the
-    transfer's test scene: 6.4 % too bright (8.7 % RMSE) with Auto, 0.05 % (0.96 %) with None)."""
-    original = material.get(SAMPLING_MARKER)
-    if original is None:
-        return
-    if getattr(material, "cycles", None) is not None and not uses_transfer(material):
-        material.cycles.emission_sampling = original
-        del material[SAMPLING_MARKER]
+def apply_keeping_transfer(materials_list, scene, mode):
+    """``materials.apply_to_materials``, the materials lit by the transfer staying so (in
+    ``mode``); (its ``Result``, names of those that kept the transfer)."""
+    materials_list = list(materials_list)
+    lit = {m.name_full: m for m in materials_list if uses_transfer(m)}
+    result = materials.apply_to_materials(materials_list, scene, mode)
+    kept = [name for name in result.changed if name in lit]
+    use_transfer_group([lit[name] for name in kept])
+    return result, kept
+
+
+def use_transfer_group(materials_list):
+    """Point the group nodes Apply added to ``materials_list`` at "SH Transfer" (same
+    interface and record) and mark them with ``NODE_MARKER``."""
+    group = None
+    for material in materials_list:
+        for node in materials.added_nodes(material):
+            group = group or nodes.ensure_node_group()
+            node.node_tree = group
+            node.label = nodes.GROUP_NAME
+            node[NODE_MARKER] = 1
 
 
 def remove_transfer_from(materials_list):
-    """Take the transfer out of ``materials_list`` (``materials.remove_from_materials`` on
-    those using it) and restore their Emission Sampling; the ``Result`` of the removal."""
-    used = [m for m in materials_list if uses_transfer(m)]
-    result = materials.remove_from_materials(used)
-    for material in materials_list:
-        restore_emission_sampling(material)
-    return result
+    """Take the transfer out of those of ``materials_list`` using it
+    (``materials.remove_from_materials``: links, nodes and the Emission Sampling Apply set, as
+    for any Apply); the ``Result`` of the removal."""
+    return materials.remove_from_materials([m for m in materials_list if uses_transfer(m)])
 
 
 def uses_transfer(material):

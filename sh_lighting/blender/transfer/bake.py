@@ -23,7 +23,9 @@ geometry and placement, and the scene's renderable objects) so the panel can say
 stale after an edit.
 
 The user's scene is changed only for the bake and put back in ``finally``: world, render
-engine, samples, selection, active colour attributes; the group nodes the add-on put into
+engine, samples, selection, active colour attributes; its lights are hidden (T_lm is the
+response to the world Y_lm alone: a lamp, e.g. one Extract Lights made, would otherwise be
+baked into every term and counted again by the lamp itself); the group nodes the add-on put into
 materials are muted during the bake (so SH emission is not baked as light; a material in
 Emission mode then reflects no light into the bake, which ``BakeInfo.notes`` says).
 """
@@ -287,6 +289,7 @@ class _Saved:
         self.render_colour = {o.name: o.data.color_attributes.render_color_index for o in picked}
         self.muted = []
         self.emission_materials = set()
+        self.lamps = []  # names of the lights hidden for the bake
 
     def prepare(self, samples):
         self.scene.render.engine = "CYCLES"
@@ -299,6 +302,10 @@ class _Saved:
             colours = obj.data.color_attributes
             scratch = colours.get(SCRATCH_NAME) or colours.new(SCRATCH_NAME, "FLOAT_COLOR", "CORNER")
             colours.active_color = scratch
+        for obj in self.scene.objects:
+            if obj.type == "LIGHT" and not obj.hide_render:
+                obj.hide_render = True
+                self.lamps.append(obj.name)
         for material in bpy.data.materials:
             for node in materials.added_nodes(material):
                 if not node.mute:
@@ -313,6 +320,10 @@ class _Saved:
         scene.render.engine = self.render["engine"]
         for key, value in self.cycles.items():
             setattr(scene.cycles, key, value)
+        for name in self.lamps:
+            lamp = self.scene.objects.get(name)
+            if lamp is not None:
+                lamp.hide_render = False
         for material_name, node_name in self.muted:
             material = bpy.data.materials.get(material_name)
             node = material.node_tree.nodes.get(node_name) if material else None

@@ -12,6 +12,7 @@ import bpy
 
 from .. import scene_data
 from ..shading import materials, notes
+from ..transfer import apply as transfer_apply
 from ..world import compute
 from .polls import coefficients_poll, scene_poll, world_poll
 
@@ -161,7 +162,7 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
             widened = [m for m in everything if m not in mats]
             mats = everything
         try:
-            result = materials.apply_to_materials(mats, scene, mode)
+            result, kept = transfer_apply.apply_keeping_transfer(mats, scene, mode)
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
@@ -174,6 +175,9 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
         reasons = _skip_reasons(result)
         if reasons:
             message += " (" + "; ".join(reasons) + ")"
+        if kept:
+            message += (f"; {len(kept)} keep the transfer (shadows): Remove, then Apply, for "
+                        "SH without it")
         if mode == "KEEP_BSDF" and result.skipped:
             message += "; the skipped ones now get no diffuse light from the world"
         lamps = notes.emission_lamp_note(scene) if mode == "EMISSION" else None

@@ -12,6 +12,7 @@ from .operators import objects_for_target
 from .polls import coefficients_poll, scene_poll
 
 MODE_ITEMS = (
+    ("SCENE", "Panel's Mode", "The Mode chosen in the panel beside Apply (the scene's setting)"),
     ("KEEP_BSDF", "Keep BSDF",
      "Keep the material's BSDF (lamps, shadows, reflections); the transfer replaces the "
      "world's diffuse light (Cycles)"),
@@ -85,8 +86,10 @@ class SHLIGHT_OT_apply_transfer(bpy.types.Operator):
     bl_label = "Apply Transfer"
     bl_options = {"REGISTER", "UNDO"}
 
-    mode: bpy.props.EnumProperty(name="Mode", items=MODE_ITEMS, default="KEEP_BSDF",
-                                 description="How the transfer joins the material")
+    mode: bpy.props.EnumProperty(name="Mode", items=MODE_ITEMS, default="SCENE",
+                                 description="How the transfer joins the material; by default "
+                                             "the Mode chosen in the panel, as for Apply",
+                                 options={"SKIP_SAVE"})
 
     @classmethod
     def poll(cls, context):
@@ -102,7 +105,8 @@ class SHLIGHT_OT_apply_transfer(bpy.types.Operator):
         scene = context.scene
         objects = objects_for_target(context, scene.sh_lighting.apply_target)
         try:
-            result = transfer_apply.apply_transfer(objects, scene, self.mode)
+            mode = scene.sh_lighting.apply_mode if self.mode == "SCENE" else self.mode
+            result = transfer_apply.apply_transfer(objects, scene, mode)
         except ValueError as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
