@@ -16,7 +16,8 @@ Scenes: benchmarks/photo_scene.py (a grey ball, albedo 0.18, Diffuse BSDF, Cycle
   nine-term fit to the world's true irradiance on those normals) and over all normals;
 * both balls: courtyard made into a chrome ball's mirror-ball image (256 px) as the world
   (Mirror Ball projection), the grey ball photographed in it one stop under from −Y and from
-  +Y: every prior (chrome: the world; photo: the +Y photo) and the exposure match.
+  +Y: every prior (chrome: the world; photo: the +Y photo) and the exposure match;
+* the suggested circle (``core.ball_detect``) on each render against the scene's circle.
 
 Errors: RMS of E over normals and channels, divided by its mean (``core.photo.relative_rms``).
 """
@@ -32,6 +33,7 @@ import numpy as np
 
 from sh_lighting.blender.photo import camera_of, chrome_coefficients
 from sh_lighting.blender.world.images import load_image_pixels
+from sh_lighting.core.ball_detect import detect_ball
 from sh_lighting.core.downsample import block_downsample
 from sh_lighting.core.irradiance import irradiance, reference_irradiance
 from sh_lighting.core.mirror_ball import mirror_ball_image, project_mirror_ball
@@ -177,7 +179,11 @@ def measure(folder):
     back = render_png(scene, Path(folder) / "back.png")
     turn_camera(scene)
     both = both_balls_table(front, back, chrome, courtyard, scene)
-    return noise, priors, both, seconds
+    found = [(name, detect_ball(load_image_pixels(path)), circle_of(projection))
+             for name, path, projection in (("nine-term world, EXR, ortho", exr, "ORTHO"),
+                                            ("courtyard, 8-bit, 85 mm", png, "PERSP"),
+                                            ("chrome-ball world, 8-bit, 85 mm", front, "PERSP"))]
+    return noise, priors, (*both, found), seconds
 
 
 def _prior_rows(rows):
@@ -228,14 +234,24 @@ def section(noise, priors, both, seconds):
               "chrome: the world read as the add-on reads it; photo: a second photo from the "
               "other side (+Y). All normals: against the world's nine terms "
               "(``project_mirror_ball`` of the image).", ""]
-    rows, match = both
+    rows, match, found = both
     lines += _prior_rows(rows)
     lines += ["", f"Exposure (chrome prior): {match.summary()} (the grey ball was one stop "
               "under: 2 expected). A chrome ball or a second photo is data about the unseen "
               "side, so it may move the seen picture by 0.5 × the nine-term misfit "
               "(``MEASURED_HEADROOM``; a guess: 0.35); the render's 10 % per-pixel noise and "
               "the nine-term misfit on the seen side still hold its weight down, so the "
-              "unseen side is not the chrome ball's exactly.", END]
+              "unseen side is not the chrome ball's exactly.", "",
+              "**Suggested circle (Detect the Ball, ``core.ball_detect``)** against the "
+              "scene's:", "", "| render | found (cx, cy, r) | scene's | rim on the circle |",
+              "|---|---|---|---|"]
+    for name, guess, circle in found:
+        text = ("none" if guess is None else
+                f"{guess.cx:.2f}, {guess.cy:.2f}, {guess.r:.2f}")
+        score = "" if guess is None else f"{100 * guess.score:.0f} %"
+        lines.append(f"| {name} | {text} | {circle[0]:.2f}, {circle[1]:.2f}, "
+                     f"{circle[2]:.2f} | {score} |")
+    lines.append(END)
     return "\n".join(lines)
 
 

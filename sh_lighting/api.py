@@ -76,7 +76,7 @@ __all__ = [
     # precomputed radiance transfer (shadows and bounce light)
     "TransferError", "bake_transfer", "transfer_status", "apply_transfer", "delete_transfer",
     # lighting from a photo of a grey ball
-    "coefficients_from_photo", "photo_exposure", "SecondPhoto",
+    "coefficients_from_photo", "photo_exposure", "SecondPhoto", "detect_photo_ball",
 ]
 
 TransferError = _transfer.TransferError
@@ -164,6 +164,14 @@ def coefficients_from_photo(scene, path, circle, **options):
     unchanged, when the photo cannot give lighting.
     """
     return _photo.coefficients_from_photo(scene, path, circle, **options)
+
+
+def detect_photo_ball(path):
+    """A suggested circle for ``coefficients_from_photo``: the ball found in the photo at
+    ``path`` (``core.ball_detect``: ``.circle`` (cx, cy, r) in pixels, ``.score`` the share of
+    its rim on the circle, ``summary()``); a ValueError when none is found. Check it before
+    using it: it is the most circular outline in the photo, not necessarily the grey ball."""
+    return _photo.detect_circle(path)
 
 
 def photo_exposure(scene, fit, chrome=None):

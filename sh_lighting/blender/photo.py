@@ -28,6 +28,7 @@ import bpy
 import numpy as np
 
 from ..core.ball_camera import PhotoCamera, PhotoError, camera_looking
+from ..core.ball_detect import detect_ball
 from ..core.photo import (
     DEFAULT_ALBEDO,
     DEFAULT_MARGIN,
@@ -77,6 +78,17 @@ def read_photo(path):
     finally:
         bpy.data.images.remove(image)
     return PhotoSource(pixels, clipped, path, file_format)
+
+
+def detect_circle(path):
+    """The ``core.ball_detect.BallGuess`` of the ball in the photo at ``path`` (a suggestion:
+    ``.circle``, ``.score``, ``summary()``), or a PhotoError when no ball is found."""
+    source = read_photo(path)
+    guess = detect_ball(source.pixels)
+    if guess is None:
+        raise PhotoError(f"no ball found in '{os.path.basename(source.path)}' (no circular "
+                         "outline stands out): give the ball's circle, typed or dragged")
+    return guess
 
 
 def camera_of(camera_object, scene=None):

@@ -24,8 +24,12 @@ def add_arguments(p, prog):
     p.epilog = (f"example:\n  {prog} from-photo ball.png --circle 640 360 120 --blend shot.blend "
                 "--out ball.json")
     p.add_argument("image", metavar="IMAGE", help="the photo of the grey ball")
-    p.add_argument("--circle", nargs=3, type=float, required=True, metavar=("CX", "CY", "R"),
-                   help="the ball's centre and radius in pixels from the top-left corner")
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--circle", nargs=3, type=float, metavar=("CX", "CY", "R"),
+                       help="the ball's centre and radius in pixels from the top-left corner")
+    where.add_argument("--detect", action="store_true",
+                       help="find the ball's circle in the photo (printed: check it, and pass "
+                       "--circle to correct it)")
     p.add_argument("--blend", metavar="BLEND",
                    help=".blend whose scene camera took the photo (under blender -P: default "
                    "the open one)")
@@ -97,12 +101,21 @@ def run(args):
         refuse_inputs(out, "--out", {"photo": image})
         check_new_file(out, args.overwrite, what="--out")
     scene = pick_scene(args.scene)
+    circle = None if args.detect else tuple(args.circle)
+    if circle is None:
+        try:
+            guess = api.detect_photo_ball(image)
+        except ValueError as error:
+            raise CommandError(f"{image}: {error}") from None
+        circle = guess.circle
+        say(f"Photo {image}: {guess.summary()}; --circle {circle[0]:.1f} {circle[1]:.1f} "
+            f"{circle[2]:.1f}")
     if second is not None and args.second_camera is not None:
         camera = bpy_object(args.second_camera)
         second = api.SecondPhoto(second.path, second.circle, camera_object=camera)
     try:
         coeffs, fit = api.coefficients_from_photo(
-            scene, image, tuple(args.circle), direction=args.direction,
+            scene, image, circle, direction=args.direction,
             roll=math.radians(args.roll), projection=args.projection.upper(),
             focal_mm=args.lens, sensor_mm=args.sensor, albedo=args.albedo,
             margin=args.margin, prior=args.prior, clip=args.clip, chrome=chrome,

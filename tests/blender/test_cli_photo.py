@@ -46,6 +46,7 @@ def test_from_photo_refuses_bad_input_in_one_line(tmp_path):
         (("--circle", 500, 32, 10, "--direction", 0, 1, 0), "outside the 64×64 image"),
         (("--circle", 32, 32, 20, "--direction", 0, 1, 0), "black"),
         (("--circle", 32, 32, 20), "no camera"),
+        (("--detect", "--direction", 0, 1, 0), "no ball found in 'ball.exr'"),
     ]:
         result = run("from-photo", photo, *extra)
         assert result.returncode == 1

@@ -347,3 +347,20 @@ def test_the_image_editor_drag_gives_the_circle_in_pixels(addon):
     assert (cx, cy) == pytest.approx((50.0, 25.0)) and r == pytest.approx(30.0)
     assert circle_from_drag((200, 100), (0.5, 0.5), (0.5, 0.3))[2] == pytest.approx(20.0)
     assert not bpy.ops.shlight.photo_circle.poll()  # no Image Editor in background mode
+
+
+def test_the_ball_is_detected_in_renders_as_a_suggestion(photos, addon, tmp_path):
+    """core.ball_detect on Cycles renders (the world behind the ball): the circle the scene
+    gives, to a fraction of a pixel; a photo with no ball gives none, in one line."""
+    for name, projection in (("sh_png", "ORTHO"), ("hdri_png", "PERSP")):
+        guess = api.detect_photo_ball(photos[name])
+        cx, cy, r = circle_of(projection)
+        # Measured: within 0.3 px (the render's 32 spp noise, the rim's antialiasing).
+        assert np.hypot(guess.cx - cx, guess.cy - cy) < 0.5, (name, guess)
+        assert guess.r == pytest.approx(r, abs=0.75), (name, guess)
+        assert guess.score > 0.8, (name, guess)
+        print(f"\n  {name}: {guess.summary()} (scene: {cx:.1f}, {cy:.1f}, {r:.2f})")
+    with pytest.raises(ValueError, match="no ball found in 'noise.png'") as info:
+        api.detect_photo_ball(hostile_photos(tmp_path)["noise"])
+    assert "\n" not in str(info.value)
+    assert not bpy.ops.shlight.photo_detect.poll()  # no Image Editor in background mode

@@ -224,8 +224,34 @@ class SHLIGHT_OT_photo_circle(bpy.types.Operator):
         return {"RUNNING_MODAL"}
 
 
+class SHLIGHT_OT_photo_detect(bpy.types.Operator):
+    """Find the ball's circle in the Image Editor's photo, then Match Photo with it (check the
+    suggested circle in the dialog, correct it if it is not the grey ball)"""
+
+    bl_idname = "shlight.photo_detect"
+    bl_label = "Match Photo: Detect the Ball"
+    bl_options = {"REGISTER"}
+
+    @classmethod
+    def poll(cls, context):
+        return SHLIGHT_OT_photo_circle.poll(context)
+
+    def execute(self, context):
+        image = context.space_data.image
+        try:
+            guess = photo.detect_circle(image.filepath)
+        except ValueError as error:
+            self.report({"ERROR"}, f"Match Photo: {error}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Match Photo: {guess.summary()}")
+        bpy.ops.shlight.match_photo("INVOKE_DEFAULT", filepath=image.filepath,
+                                    circle=guess.circle)
+        return {"FINISHED"}
+
+
 def draw_image_menu(self, context):
     self.layout.operator(SHLIGHT_OT_photo_circle.bl_idname, icon="IMAGE_DATA")
+    self.layout.operator(SHLIGHT_OT_photo_detect.bl_idname, icon="VIEWZOOM")
 
 
 def draw_photo(layout, context):
@@ -240,7 +266,8 @@ def draw_photo(layout, context):
 SHLIGHT_PT_world_photo, SHLIGHT_PT_view3d_photo = sub_panels(
     "photo", "Photo", draw_photo, options=("DEFAULT_CLOSED",))
 
-classes = (SHLIGHT_OT_match_photo, SHLIGHT_OT_photo_circle, SHLIGHT_PT_world_photo,
+classes = (SHLIGHT_OT_match_photo, SHLIGHT_OT_photo_circle, SHLIGHT_OT_photo_detect,
+           SHLIGHT_PT_world_photo,
            SHLIGHT_PT_view3d_photo)
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
 
