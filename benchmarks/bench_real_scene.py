@@ -13,7 +13,12 @@ render is compared with Cycles path tracing of the original world (``REFERENCE_S
 * time: the render's wall time (the machine is shared: see the load average).
 
 The section between the markers in benchmarks/REPORT.md is replaced (appended the first time).
-``METHODS`` is a list: another mode (e.g. the transfer) is one more entry.
+``METHODS`` is a list: another mode is one more entry. ``TRANSFER_METHODS`` (issue 22) bake
+the transfer of all four objects once per HDRI (Cycles, ``TRANSFER_SAMPLES``; the ground is a
+grid, fine near the objects, so that the per-corner transfer can hold their shadows) and
+render it, with and without Extract Lights; the EEVEE frame time of Blender's own world
+lighting and of the transfer with lights is also measured warm (second render of each, the
+shaders compiled), since a first EEVEE render here is mostly the shader compile.
 """
 
 import argparse
@@ -24,12 +29,15 @@ import time
 from pathlib import Path
 
 import bpy
+import bmesh  # noqa: I001 (after bpy: the bpy module provides it)
 import numpy as np
 from mathutils import Vector
 
 from sh_lighting import api
 from sh_lighting.blender import compat
 from sh_lighting.blender.shading import materials
+from sh_lighting.blender.transfer import apply as transfer_apply
+from sh_lighting.blender.transfer import bake
 from sh_lighting.blender.world.images import load_image_pixels
 
 from .render_bench import _settings
@@ -39,6 +47,8 @@ BEGIN, END = "<!-- bench_real_scene -->", "<!-- /bench_real_scene -->"
 HDRIS = ("sunrise", "forest")
 REFERENCE_SAMPLES = 512
 EEVEE_SAMPLES = 16
+TRANSFER_SAMPLES = 64  # the bake's default: E noise about 1.4 % per corner (REPORT.md)
+LIGHTS = 2  # Extract Lights' count, as in issue 21's table
 
 
 def _principled(name, **inputs):
@@ -47,6 +57,38 @@ def _principled(name, **inputs):
     for key, value in inputs.items():
         bsdf.inputs[key.replace("_", " ")].default_value = value
     return material
+
+
+def _grid_lines(half, fine_half, step, growth=1.25):
+    """Coordinates from -half to half: every ``step`` within ±fine_half, then steps growing by
+    ``growth`` out to the edge."""
+    inner = np.linspace(-fine_half, fine_half, int(round(2 * fine_half / step)) + 1)
+    outer, position, width = [], fine_half, step
+    while position < half - 1e-6:
+        width *= growth
+        position = min(position + width, half)
+        outer.append(position)
+    outer = np.array(outer)
+    return np.concatenate([-outer[::-1], inner, outer])
+
+
+def _ground(size=40.0, fine_half=4.0, step=0.12):
+    """The ground plane (``size`` m square) as a grid, ``step`` m apart within ±fine_half of
+    the objects: rendered as a plane, and fine enough for the transfer's per-corner shadows."""
+    xs = _grid_lines(size / 2, fine_half, step)
+    ys = xs + 0.3  # the objects stand around y = 0.3
+    ys[0], ys[-1] = -size / 2, size / 2
+    bm = bmesh.new()
+    verts = [[bm.verts.new((x, y, 0.0)) for x in xs] for y in ys]
+    for j in range(len(ys) - 1):
+        for i in range(len(xs) - 1):
+            bm.faces.new((verts[j][i], verts[j][i + 1], verts[j + 1][i + 1], verts[j + 1][i]))
+    mesh = bpy.data.meshes.new("Ground")
+    bm.to_mesh(mesh)
+    bm.free()
+    ground = bpy.data.objects.new("Ground", mesh)
+    bpy.context.scene.collection.objects.link(ground)
+    return ground
 
 
 def build_scene(hdri_path, size):
@@ -62,11 +104,15 @@ def build_scene(hdri_path, size):
     diffuse = _principled("Diffuse", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=0.5)
     glossy = _principled("Glossy", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=0.5,
                          Metallic=0.8)
-    roles = {"ground": [], "diffuse": [], "glossy": []}
-    bpy.ops.mesh.primitive_plane_add(size=40.0)
-    roles["ground"].append(bpy.context.object)
+    roles = {"ground": [_ground()], "diffuse": [], "glossy": []}
     bpy.ops.mesh.primitive_cube_add(size=1.2, location=(-1.6, 0.4, 0.6))
-    roles["diffuse"].append(bpy.context.object)
+    box = bpy.context.object
+    bm = bmesh.new()
+    bm.from_mesh(box.data)
+    bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=7, use_grid_fill=True)
+    bm.to_mesh(box.data)
+    bm.free()
+    roles["diffuse"].append(box)
     bpy.ops.mesh.primitive_monkey_add(size=1.4, location=(0.2, 0.0, 0.75))
     bpy.ops.object.shade_smooth()
     roles["diffuse"].append(bpy.context.object)
@@ -168,19 +214,94 @@ def measure(hdri, size, folder):
                                  samples, seed=index)
         if mode is not None:
             materials.remove_from_materials(all_mats)
-        diffuse = masks["diffuse"] | masks["ground"]
-        rows.append({
-            "method": name, "diffuse": _rrmse(image, reference, diffuse),
-            "glossy": _rrmse(image, reference, masks["glossy"]),
-            "shadowed": _rrmse(image, reference, masks["shadowed"]),
-            "bright": float(image[diffuse].mean() / reference[diffuse].mean()),
-            "seconds": seconds,
-        })
+        rows.append(_row(name, image, reference, masks, seconds))
         print(f"{hdri}: {name}: {rows[-1]}", flush=True)
-    return rows
+    transfer, notes = transfer_rows(scene, roles, reference, masks, folder, hdri)
+    return rows + transfer, notes
 
 
-def section(results, size, load, elapsed):
+def _row(name, image, reference, masks, seconds):
+    diffuse = masks["diffuse"] | masks["ground"]
+    return {
+        "method": name, "diffuse": _rrmse(image, reference, diffuse),
+        "glossy": _rrmse(image, reference, masks["glossy"]),
+        "shadowed": _rrmse(image, reference, masks["shadowed"]),
+        "bright": float(image[diffuse].mean() / reference[diffuse].mean()),
+        "seconds": seconds,
+    }
+
+
+# Transfer rows: (name, engine, Apply mode, samples, Extract Lights count). Emission Only
+# receives no lamps, so it is shown without them.
+TRANSFER_METHODS = [
+    ("Cycles TRANSFER Emission Only, 1 spp", "CYCLES", "EMISSION", 1, 0),
+    ("EEVEE TRANSFER Keep BSDF", "EEVEE", "KEEP_BSDF", EEVEE_SAMPLES, 0),
+    (f"EEVEE TRANSFER Keep BSDF + Extract Lights ({LIGHTS})", "EEVEE", "KEEP_BSDF",
+     EEVEE_SAMPLES, LIGHTS),
+    (f"Cycles TRANSFER Keep BSDF + Extract Lights ({LIGHTS}), 16 spp", "CYCLES", "KEEP_BSDF",
+     16, LIGHTS),
+    (f"Cycles TRANSFER Keep BSDF + Extract Lights ({LIGHTS}), 64 spp", "CYCLES", "KEEP_BSDF",
+     64, LIGHTS),
+]
+
+
+def transfer_rows(scene, roles, reference, masks, folder, hdri):
+    """Bake the transfer of every object, render ``TRANSFER_METHODS``, then the warm EEVEE
+    frame times; (rows, notes: lines for the report)."""
+    objects = [obj for group in roles.values() for obj in group]
+    info = bake.bake_transfer(scene, objects, samples=TRANSFER_SAMPLES)
+    notes = [f"transfer bake: {info.vertices} vertices, {info.corners} corners, "
+             f"{info.samples} samples, {info.seconds:.1f} s "
+             f"({info.seconds / info.vertices * 1e4:.0f} s per 10k vertices)"]
+    mats = materials.materials_of(objects)
+    rows, lights = [], 0
+    for index, (name, engine, mode, samples, count) in enumerate(TRANSFER_METHODS):
+        if count != lights:
+            if count:
+                notes.append(api.extract_lights(scene, count=count).report())
+            else:
+                api.compute_from_world(scene)  # deletes the extracted lights
+            lights = count
+        transfer_apply.apply_transfer(objects, scene, mode)
+        engine_id = compat.eevee_engine_id() if engine == "EEVEE" else "CYCLES"
+        seconds, image = _render(scene, Path(folder) / f"{hdri}_t{index}.exr", engine_id,
+                                 samples, seed=100 + index)
+        materials.remove_from_materials(mats)
+        rows.append(_row(name, image, reference, masks, seconds))
+        print(f"{hdri}: {name}: {rows[-1]}", flush=True)
+    notes.append(_warm_eevee_times(scene, objects, folder, hdri, lights))
+    api.compute_from_world(scene)
+    for note in notes:
+        print(f"NOTE {hdri}: {note}", flush=True)
+    return rows, notes
+
+
+def _warm_eevee_times(scene, objects, folder, hdri, lights):
+    """EEVEE frame time, shaders compiled: each variant rendered twice in a row, the second
+    timed; world, transfer + lights, world, transfer + lights (interleaved)."""
+    times = {"world": [], "transfer": []}
+    engine = compat.eevee_engine_id()
+    mats = materials.materials_of(objects)
+    for _ in range(2):
+        for variant in times:
+            if variant == "world":
+                api.compute_from_world(scene)  # no lights
+            else:
+                if lights:
+                    api.extract_lights(scene, count=lights)
+                transfer_apply.apply_transfer(objects, scene, "KEEP_BSDF")
+            for _repeat in range(2):
+                seconds, _ = _render(scene, Path(folder) / f"{hdri}_warm.exr", engine,
+                                     EEVEE_SAMPLES)
+            times[variant].append(seconds)
+            materials.remove_from_materials(mats)
+    world, transfer = min(times["world"]), min(times["transfer"])
+    return (f"EEVEE frame time, shaders compiled (second of two renders, best of 2 "
+            f"interleaved): Blender's own world lighting {world:.2f} s, TRANSFER Keep BSDF + "
+            f"Extract Lights ({lights}) {transfer:.2f} s ({transfer / world:.2f}×)")
+
+
+def section(results, size, load, elapsed, notes=None):
     lines = [BEGIN, "", "## Real scene: every Apply mode against path tracing (issue 21)", "",
              f"`python -m benchmarks.bench_real_scene` ({size}×{size} px, reference: Cycles "
              f"path tracing of the world at {REFERENCE_SAMPLES} spp, max 4 bounces; load "
@@ -197,6 +318,9 @@ def section(results, size, load, elapsed):
             lines.append(f"| {r['method']} | {r['diffuse']:.1%} | {r['glossy']:.1%} | "
                          f"{r['shadowed']:.1%} | {r['bright']:.3f} | {r['seconds']:.1f} s |")
         lines.append("")
+        lines += [f"- {note}" for note in (notes or {}).get(hdri, ())]
+        if (notes or {}).get(hdri):
+            lines.append("")
     lines.append(END)
     return "\n".join(lines)
 
@@ -219,8 +343,10 @@ def main(argv=None):
     start = time.perf_counter()
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
     with tempfile.TemporaryDirectory() as folder:
-        results = {hdri: measure(hdri, args.size, folder) for hdri in HDRIS}
-    write(args.out, section(results, args.size, load, time.perf_counter() - start))
+        results, notes = {}, {}
+        for hdri in HDRIS:
+            results[hdri], notes[hdri] = measure(hdri, args.size, folder)
+    write(args.out, section(results, args.size, load, time.perf_counter() - start, notes))
     print(f"wrote the real-scene section of {args.out}")
 
 

@@ -1,7 +1,7 @@
 """Transfer (issue 22): bake error against bake samples, bake seconds per 10k vertices, and
 Cycles at equal error (transfer at 1 sample against path tracing). Prints a Markdown section
-for benchmarks/REPORT.md. Run: ``python -m benchmarks.bench_transfer [--eevee]``, or ``--equal-error`` for the
-160 px equal-error comparison alone.
+for benchmarks/REPORT.md. Run: ``python -m benchmarks.bench_transfer [--eevee]``, or
+``--equal-error [--size N]`` for the equal-error comparison alone (160 px by default).
 
 Scene (tests/transfer_scenes.py): a 4 m ground in 24 × 24 quads and a 1 m box (6 × 6 quads a
 face) on it, grey diffuse 0.8, under a world emitting exactly Σ L_lm Y_lm (grey LIGHTING),
@@ -145,29 +145,50 @@ def main(eevee=False):
     print("\n".join(lines))
 
 
-def equal_error(size=160, ground_cuts=64, box_cuts=8):
+def equal_error(size=160, ground_cuts=64, box_cuts=8, repeats=2):
     """Transfer at 1 spp against path tracing at a few sample counts, at a size where a
-    render is not all overhead and with a mesh dense enough for ~1 % interpolation error."""
+    render is not all overhead and with a mesh dense enough for ~1 % interpolation error.
+
+    The renders are interleaved (path tracing at each count, then the transfer, ``repeats``
+    times; each time the best of its repeats), so the load hits both alike. Equal error:
+    path tracing's error fitted as a / √spp, its time as t0 + t1 · spp (least squares), at
+    the spp giving the transfer's error."""
     scene, ground, box = scene_for(ground_cuts, box_cuts, size)
+    diffuse = ground.material_slots[0].material
     reference, alpha, ref_seconds = timed_render(scene, "equal_reference", 2048)
     mask = np.repeat((alpha > 0.999)[..., None], 3, axis=-1)
-    rows = []
-    for spp in (16, 32, 64, 128, 256):
-        rgb, _, seconds = timed_render(scene, f"equal{spp}", spp)
-        rows.append((f"path tracing | {spp}", ts.relative_rmse(rgb, reference, mask), seconds))
     info = bake.bake_transfer(scene, [ground, box], samples=64)
-    ts.use_material([ground, box], ts.transfer_material())
-    rgb, _, seconds = timed_render(scene, "equal_transfer", 1)
-    rows.append(("transfer (bake 64 samples) | 1", ts.relative_rmse(rgb, reference, mask), seconds))
+    transfer = ts.transfer_material()
+    counts = (16, 32, 64, 128, 256)
+    errors, times = {}, {}
+    for _ in range(repeats):
+        for spp in (*counts, 1):
+            ts.use_material([ground, box], transfer if spp == 1 else diffuse)
+            rgb, _, seconds = timed_render(scene, f"equal{spp}", spp)
+            errors[spp] = ts.relative_rmse(rgb, reference, mask)
+            times[spp] = min(seconds, times.get(spp, np.inf))
+    spp = np.array(counts, float)
+    a = float(np.exp(np.mean(np.log([errors[n] for n in counts]) + 0.5 * np.log(spp))))
+    t1, t0 = np.polyfit(spp, [times[n] for n in counts], 1)
+    equal = (a / errors[1]) ** 2
+    equal_seconds = t0 + t1 * equal
     lines = [f"{size} × {size} px, ground {ground_cuts} × {ground_cuts} quads, {info.vertices} "
              f"vertices, bake {info.seconds:.1f} s, reference 2048 spp {ref_seconds:.1f} s, "
-             f"load {load()}:", "", "| method | spp | error | render s |", "|---|---|---|---|"]
-    lines += [f"| {name} | {100 * error:.2f} % | {seconds:.2f} |" for name, error, seconds in rows]
+             f"renders interleaved, best of {repeats}; load at the end {load()}:", "",
+             "| method | spp | error | render s |", "|---|---|---|---|",
+             f"| transfer (bake 64 samples) | 1 | {100 * errors[1]:.2f} % | {times[1]:.2f} |"]
+    lines += [f"| path tracing | {n} | {100 * errors[n]:.2f} % | {times[n]:.2f} |" for n in counts]
+    lines += ["", f"Path tracing fitted: error {100 * a:.1f} % / √spp, time {t0:.2f} s + "
+              f"{1000 * t1:.1f} ms · spp; the transfer's {100 * errors[1]:.2f} % at {equal:.0f} "
+              f"spp, {equal_seconds:.2f} s: **{equal_seconds / times[1]:.1f}×** the transfer's "
+              f"{times[1]:.2f} s (bake {info.seconds:.1f} s = {info.seconds / equal_seconds:.1f} "
+              "such path-traced frames)."]
     print("\n".join(lines))
 
 
 if __name__ == "__main__":
     if "--equal-error" in sys.argv:
-        equal_error()
+        size = int(sys.argv[sys.argv.index("--size") + 1]) if "--size" in sys.argv else 160
+        equal_error(size)
     else:
         main(eevee="--eevee" in sys.argv)
