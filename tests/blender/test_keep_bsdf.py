@@ -22,7 +22,7 @@ from benchmarks.shadow_scene import (
     principled_material,
 )
 from sh_lighting import api
-from sh_lighting.blender.shading import keep_bsdf, materials
+from sh_lighting.blender.shading import glossy, keep_bsdf, materials
 from sh_lighting.core import project_equirect
 
 SIZE = 48
@@ -204,3 +204,31 @@ def test_principled_weight_follows_metallic_transmission_and_ior(studio):
     assert ratio == pytest.approx(expected, rel=3e-3 if LTS else 1e-5)
     with pytest.raises(ValueError, match="unknown Apply mode"):
         materials.apply_to_materials([material], s.scene, mode="SOMETHING")
+
+
+def test_the_worlds_prefiltered_maps_follow_compute_and_go_with_remove(addon, hdri_dir,
+                                                                     tmp_path):
+    """Issue 21 item 1: the maps EEVEE's reflections come from are made by Apply, rewritten in
+    place by Compute from World (Strength 2: twice the radiance, the same images), saved
+    packed, and deleted by Remove with every node Apply added."""
+    s = ShadowScene(hdri_dir / "forest.exr", 8, tmp_path)
+    s.sphere.data.materials[0] = principled_material("Glossy", Metallic=0.8, Roughness=0.5)
+    api.compute_from_world(s.scene)
+    mats = materials.materials_of(s.scene.objects)
+    counts = [len(m.node_tree.nodes) for m in mats]
+    materials.apply_to_materials(mats, s.scene, "KEEP_BSDF")
+    images = glossy.maps_of(s.world)
+
+    def radiance():
+        pixels = np.empty(len(images[2].pixels), np.float32)
+        images[2].pixels.foreach_get(pixels)
+        return pixels.reshape(-1, 4)[:, :3].mean()
+
+    before = radiance()
+    s.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0
+    api.compute_from_world(s.scene)
+    assert glossy.maps_of(s.world) == images and radiance() == pytest.approx(2 * before)
+    assert all(image.packed_file is not None for image in images)
+    materials.remove_from_materials(mats)
+    assert [len(m.node_tree.nodes) for m in mats] == counts
+    assert not [image for image in bpy.data.images if glossy.IMAGE_MARKER in image]

@@ -419,7 +419,7 @@ def test_panel_says_what_the_mode_does_and_what_emission_drops(addon):
     assert notes.status_lines(scene, "KEEP_BSDF") == [
         ("INFO", "SH diffuse, lamps, reflections")]
     scene.render.engine = compat.eevee_engine_id()
-    assert "no reflections" in notes.status_lines(scene, "KEEP_BSDF")[0][1]
+    assert "reflection maps" in notes.status_lines(scene, "KEEP_BSDF")[0][1]
     lamp = bpy.data.objects.new("Key", bpy.data.lights.new("Key", "SUN"))
     scene.collection.objects.link(lamp)
     assert ("ERROR", "1 lamp(s) will not light them") in notes.status_lines(scene, "EMISSION")
@@ -504,3 +504,24 @@ def test_compute_and_extract_lights_share_one_no_world_poll(addon):
         with pytest.raises(RuntimeError, match=rf"{polls.NO_WORLD}$".replace("(", r"\(")
                            .replace(")", r"\)")):
             operator()
+
+
+def test_keep_bsdf_says_which_reflections_eevee_does_not_show(addon):
+    """Issue 21 item 1: EEVEE gets the world's reflections back for Principled BSDFs only
+    (shading/glossy.py); Apply's report names the shaders and layers it does not model."""
+    scene = bpy.context.scene
+    (lit, material), _other = two_objects_with_materials()
+    scene_data.store(scene, KNOWN, SCRIPT)
+    tree = material.node_tree
+    principled = tree.nodes["Principled BSDF"]
+    principled.inputs["Coat Weight"].default_value = 0.3
+    shiny = tree.nodes.new("ShaderNodeBsdfGlossy")
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    tree.links.new(principled.outputs[0], mix.inputs[1])
+    tree.links.new(shiny.outputs[0], mix.inputs[2])
+    tree.links.new(mix.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    result, reports = run_execute(operators.SHLIGHT_OT_apply)
+    assert result == {"FINISHED"}
+    assert (f"EEVEE does not show the world's reflections off Coat of 'Principled BSDF' in "
+            f"'{material.name}', Glossy BSDF '{shiny.name}' in '{material.name}' (Cycles does)"
+            in reports[0][1])

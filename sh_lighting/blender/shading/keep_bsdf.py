@@ -41,7 +41,7 @@ PRINCIPLED = "ShaderNodeBsdfPrincipled"
 WEIGHT_INPUTS = ("Metallic", "Transmission Weight")
 
 
-class _Builder:
+class Builder:
     """Adds nodes (appended to ``added``) and drivers to ``material``'s tree."""
 
     def __init__(self, material, added, held):
@@ -71,11 +71,13 @@ class _Builder:
                 linked = self.sources[key] = _hold(self.tree, source, self.held)
         self.tree.links.new(linked, target)
 
-    def math(self, operation, first=None, second=None):
-        """A Math node; each operand a number, an output socket, or ("follow", input socket)."""
-        node = self.node("ShaderNodeMath", f"SH diffuse weight ({operation.lower()})",
-                         operation=operation)
-        for socket, value in zip(node.inputs, (first, second)):
+    def math(self, operation, first=None, second=None, third=None, label="SH diffuse weight",
+             clamp=False):
+        """A Math node; each operand a number, an output socket, or ("follow", input socket);
+        ``clamp``: its result clamped to [0, 1]."""
+        node = self.node("ShaderNodeMath", f"{label} ({operation.lower()})",
+                         operation=operation, use_clamp=clamp)
+        for socket, value in zip(node.inputs, (first, second, third)):
             if isinstance(value, (int, float)):
                 socket.default_value = value
             elif isinstance(value, tuple):
@@ -85,42 +87,65 @@ class _Builder:
         return node.outputs[0]
 
 
-def _leaf_factors(b, leaf, with_specular):
-    """Output sockets (or numbers) whose product is the leaf's weight, Mix factors included."""
+def coverage_factors(b, leaf):
+    """Output sockets whose product is the share of the surface the leaf renders: its Mix
+    factors and, for a Principled BSDF, its Alpha."""
     factors = []
     for mix, second in leaf.path:
         fac = mix.inputs[0]
         factors.append(b.math("MULTIPLY", ("follow", fac), 1.0) if second
                        else b.math("SUBTRACT", 1.0, ("follow", fac)))
+    alpha = leaf.node.inputs.get("Alpha") if leaf.node.bl_idname == PRINCIPLED else None
+    if alpha is not None:
+        factors.append(b.math("MULTIPLY", ("follow", alpha), 1.0))
+    return factors
+
+
+def product(b, factors, label="SH diffuse weight"):
+    """An output socket of the product of ``factors`` (1.0 when there are none)."""
+    weight = factors[0] if factors else 1.0
+    for factor in factors[1:]:
+        weight = b.math("MULTIPLY", weight, factor, label=label)
+    return weight
+
+
+def _leaf_factors(b, leaf, with_specular):
+    """Output sockets (or numbers) whose product is the leaf's weight, Mix factors included."""
+    factors = coverage_factors(b, leaf)
     bsdf = leaf.node
     if bsdf.bl_idname != PRINCIPLED:
         return factors
-    alpha = bsdf.inputs.get("Alpha")
-    if alpha is not None:
-        factors.append(b.math("MULTIPLY", ("follow", alpha), 1.0))
     for name in WEIGHT_INPUTS:
         source = bsdf.inputs.get(name)
         if source is not None:
             factors.append(b.math("SUBTRACT", 1.0, ("follow", source)))
-    ior = bsdf.inputs.get("IOR")
-    if with_specular and ior is not None:
-        ratio = b.math("DIVIDE", b.math("SUBTRACT", ("follow", ior), 1.0),
-                       b.math("ADD", ("follow", ior), 1.0))
-        factors.append(b.math("SUBTRACT", 1.0, b.math("POWER", ratio, 2.0)))
+    f0 = dielectric_f0(b, bsdf) if with_specular else None
+    if f0 is not None:
+        factors.append(b.math("SUBTRACT", 1.0, f0))
     return factors
 
 
-def albedo(material, leaves, with_specular, added, held):
+def dielectric_f0(b, bsdf, label="SH diffuse weight"):
+    """An output socket of F0 = ((η − 1)/(η + 1))² of Principled ``bsdf``'s IOR η (followed),
+    or None when it has no IOR input."""
+    ior = bsdf.inputs.get("IOR")
+    if ior is None:
+        return None
+    ratio = b.math("DIVIDE", b.math("SUBTRACT", ("follow", ior), 1.0, label=label),
+                   b.math("ADD", ("follow", ior), 1.0, label=label), label=label)
+    return b.math("POWER", ratio, 2.0, label=label)
+
+
+def albedo(material, leaves, with_specular, added, held, builder=None):
     """An output socket of the surface's diffuse albedo (module docstring), built from nodes
     appended to ``added``; ``with_specular``: include the (1 − F0) factor. The inputs given a
-    Value/RGB node are appended to ``held`` as records for ``release``."""
-    b = _Builder(material, added, held)
+    Value/RGB node are appended to ``held`` as records for ``release``. ``builder``: a
+    ``Builder`` shared with other nodes built from the same inputs (``glossy``), so that one
+    held node feeds them all."""
+    b = builder or Builder(material, added, held)
     total = None
     for leaf in leaves:
-        factors = _leaf_factors(b, leaf, with_specular)
-        weight = factors[0] if factors else 1.0
-        for factor in factors[1:]:
-            weight = b.math("MULTIPLY", weight, factor)
+        weight = product(b, _leaf_factors(b, leaf, with_specular))
         scaled = b.node("ShaderNodeVectorMath", "SH diffuse albedo", operation="SCALE")
         b.follow(scaled.inputs[0], leaf.node.inputs[DIFFUSE_SHADERS[leaf.node.bl_idname]])
         if isinstance(weight, float):

@@ -7,7 +7,8 @@ Two modes (``MODES``):
   group's Emission (the surface's diffuse albedo × E/π, eq. 13 of Ramamoorthi and Hanrahan
   2001) is added to it, replacing the world's diffuse light, which the world then no longer
   gives, in Cycles or EEVEE (``world_diffuse``; in EEVEE the world lights nothing but the
-  camera's background, so its reflections are not shown either).
+  camera's background, and each material gets the world's reflections back, for EEVEE only,
+  from maps prefiltered for its roughness: ``glossy``).
 * "EMISSION": the group's Emission alone drives the Surface: exact, noise free at one sample,
   but nothing else lights the material (no lamps, no reflections; ``notes`` says so in the
   panel and at Apply).
@@ -42,8 +43,8 @@ import bpy
 
 from ...choices import APPLY_MODES
 from .. import compat
-from . import keep_bsdf, world_diffuse
-from .diffuse_weight import diffuse_leaves, linked_socket
+from . import glossy, keep_bsdf, world_diffuse
+from .diffuse_weight import diffuse_leaves, linked_socket, surface_leaves
 from .nodes import GROUP_NAME, ensure_node_group
 
 # Custom property of the added group node: JSON {"version": 2, "mode": ..., "outputs": [...],
@@ -151,10 +152,12 @@ def apply_to_materials(materials, scene, mode=DEFAULT_MODE):
     changed, skipped = [], []
     # The group, built once, when the first material gets it (an error: again next time).
     group = functools.cache(ensure_node_group)
+    # The world's prefiltered maps, read once, when the first Principled BSDF reflects them.
+    maps = functools.cache(lambda: glossy.maps_for(scene))
     for material in _unique(materials):
         name = _name(material)
         try:
-            _apply_one(material, group, mode)
+            _apply_one(material, group, mode, maps)
         except SkipMaterial as error:
             skipped.append((name, str(error)))
             continue
@@ -184,15 +187,18 @@ def _worlds_lighting(names, scene):
 
 
 def _restore_worlds_if_unused():
-    """The worlds' diffuse visibility back once no material of the file keeps its BSDF."""
+    """The worlds' diffuse visibility back, the prefiltered maps deleted, once no material of
+    the file keeps its BSDF."""
     if not any(mode_of(m) == "KEEP_BSDF" for m in bpy.data.materials if m.library is None):
         world_diffuse.restore_worlds(bpy.data.worlds)
+        glossy.remove_maps()
 
 
-def _apply_one(material, group, mode):
+def _apply_one(material, group, mode, maps=lambda: None):
     """Apply to one material (refreshing it if applied); SkipMaterial when left alone.
 
-    ``group``: returns the SH group, called only once the material is known to take it.
+    ``group``: returns the SH group, called only once the material is known to take it;
+    ``maps``: returns the world's prefiltered maps (``glossy.maps_for``) or None.
     """
     _check_editable(material)
     refreshed = is_applied(material)
@@ -209,7 +215,7 @@ def _apply_one(material, group, mode):
         raise
     tree = group()
     try:
-        _apply(material, plan, tree, mode)
+        _apply(material, plan, tree, mode, maps)
     except Exception as error:  # rolled back by _apply: report, go on with the rest
         state = "without SH lighting" if refreshed else "unchanged"
         raise SkipMaterial(f"failed and was left {state}: {error}") from error
@@ -265,6 +271,7 @@ class _Plan(NamedTuple):
     active: object  # the output the surface was traced from, for placing the new node
     leaves: list  # diffuse_weight.Leaf of the surface's diffuse shaders
     normal: object  # socket linked to the first diffuse shader's Normal, or None
+    surface: list  # diffuse_weight.Leaf of every shader of the surface (for its reflections)
 
 
 def _plan(material):
@@ -278,7 +285,22 @@ def _plan(material):
     if reason is not None:
         raise SkipMaterial(reason)
     return _Plan(outputs=outputs, active=active, leaves=leaves,
-                 normal=linked_socket(leaves[0].node.inputs.get("Normal")))
+                 normal=linked_socket(leaves[0].node.inputs.get("Normal")),
+                 surface=surface_leaves(active))
+
+
+def surface_shaders(material):
+    """The ``diffuse_weight.Leaf``s of what ``material``'s active Material Output renders
+    ([] without nodes or output)."""
+    tree = getattr(material, "node_tree", None)
+    outputs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"] if tree else []
+    if not outputs:
+        return []
+    active = next((node for node in outputs if node.is_active_output), outputs[0])
+    try:
+        return surface_leaves(active)
+    except ValueError:
+        return []
 
 
 def _surface_record(output):
@@ -294,7 +316,7 @@ def _surface_record(output):
     }
 
 
-def _apply(material, plan, group, mode):
+def _apply(material, plan, group, mode, maps=lambda: None):
     tree = material.node_tree
     record = {"version": RECORD_VERSION, "mode": mode, "added": [],
               "outputs": [_surface_record(o) for o in plan.outputs]}
@@ -315,12 +337,16 @@ def _apply(material, plan, group, mode):
         node.location = (plan.active.location.x - GROUP_NODE_WIDTH - 60.0,
                          plan.active.location.y + 220.0)
         node[NODE_MARKER] = json.dumps(record)
-        albedo = keep_bsdf.albedo(material, plan.leaves, mode == "KEEP_BSDF", added, held)
+        builder = keep_bsdf.Builder(material, added, held)
+        albedo = keep_bsdf.albedo(material, plan.leaves, mode == "KEEP_BSDF", added, held,
+                                  builder)
         tree.links.new(albedo, node.inputs["Albedo"])
         if plan.normal is not None:
             tree.links.new(plan.normal, node.inputs["Normal"])
         for output in plan.outputs:
             _drive_surface(tree, output, node, mode, added)
+        if mode == "KEEP_BSDF":  # the world's reflections, which EEVEE's lighting lost
+            glossy.add_eevee_reflections(builder, plan.surface, plan.outputs, plan.active, maps)
         for index, extra in enumerate(added):
             extra.location = (node.location.x - 220.0 - 180.0 * (index // 6),
                               node.location.y - 120.0 * (index % 6))

@@ -6,13 +6,14 @@ item 5). Whatever a mode cannot do is said where it matters, never silently drop
 import bpy
 
 from .. import scene_data
-from . import world_diffuse
-from .materials import mode_of, scene_materials
+from . import glossy, world_diffuse
+from .keep_bsdf import PRINCIPLED
+from .materials import mode_of, scene_materials, surface_shaders
 
 # One line each, read in full in the sidebar at its default width (MODE_NOTE_CHARACTERS).
 MODE_NOTES = {
     ("KEEP_BSDF", "CYCLES"): "SH diffuse, lamps, reflections",
-    ("KEEP_BSDF", "EEVEE"): "SH diffuse, lamps; no reflections",
+    ("KEEP_BSDF", "EEVEE"): "SH diffuse, lamps, reflection maps",
     ("EMISSION", "CYCLES"): "SH only: no lamps or reflections",
     ("EMISSION", "EEVEE"): "SH only: no lamps or reflections",
 }
@@ -102,3 +103,22 @@ def shared_scene_notes(scene, names):
                          f"world '{other.world.name}' gives no diffuse light there either, but "
                          f"{' and '.join(missing)}")
     return lines
+
+
+def reflection_note(scene, names):
+    """One line on the world's reflections EEVEE will not show on the Keep BSDF materials
+    ``names`` (shaders and layers ``glossy`` does not model, or no maps: the world could not
+    be read), else None."""
+    parts, missing = [], False
+    for name in names:
+        leaves = surface_shaders(bpy.data.materials.get(name))
+        missing = missing or any(leaf.node.bl_idname == PRINCIPLED for leaf in leaves)
+        parts += [f"{what} in '{name}'" for what in glossy.unmodelled(leaves)]
+    problem = glossy.reflection_problem(scene) if missing else None
+    if problem is not None:
+        return f"EEVEE shows no reflections of the world: {problem}"
+    if not parts:
+        return None
+    more = f" and {len(parts) - 3} more" if len(parts) > 3 else ""
+    return ("EEVEE does not show the world's reflections off " + ", ".join(parts[:3]) + more
+            + " (Cycles does)")

@@ -14,7 +14,8 @@ Ramamoorthi and Hanrahan 2001, ``nodes.py``), so the world must not light it a s
   glossy alike. So a World Output of target EEVEE is added (EEVEE prefers an output of its own
   target to one of "All"), whose Surface is Mix(nothing, the world's surface, Is Camera Ray):
   the camera sees the world, the capture sees black. In EEVEE the materials are then lit by
-  the SH term and the lamps only: the world's own reflections are not shown (``ENGINE_NOTES``).
+  the SH term and the lamps; the world's reflections come back through maps of it prefiltered
+  for the roughness, added to each material for EEVEE only (``glossy``, ``ENGINE_NOTES``).
 
 The original visibility and the names of the nodes added are kept on the world as JSON in
 ``WORLD_MARKER``; each added node carries ``NODE_MARKER``. ``restore`` puts the visibility back
@@ -34,8 +35,8 @@ OUTPUT_NAME = "SH Lighting: EEVEE World Output"
 ENGINE_NOTES = {
     "CYCLES": "Cycles: the world lights diffuse surfaces through SH only; lamps, shadows and "
               "the world's reflections as usual",
-    "EEVEE": "EEVEE: the world lights surfaces through SH only; lamps and shadows as usual, "
-             "the world's reflections are not shown (Cycles shows them)",
+    "EEVEE": "EEVEE: the world lights diffuse surfaces through SH only, its reflections "
+             "come from prefiltered maps (Principled BSDFs); lamps and shadows as usual",
 }
 
 

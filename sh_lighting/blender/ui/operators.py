@@ -186,6 +186,9 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
         shared = notes.shared_scene_notes(scene, result.changed) if mode == "KEEP_BSDF" else []
         if shared:
             message += "; " + "; ".join(shared)
+        reflections = notes.reflection_note(scene, result.changed) if mode == "KEEP_BSDF" else None
+        if reflections:
+            message += f"; {reflections}"
         if bare:
             message += f"; {bare}"
         warn = ((skipped or bare) and not changed) or (lamps and changed) or shared

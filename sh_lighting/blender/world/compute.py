@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import preferences, properties, scene_data
 from ..design import lights
+from ..shading import glossy
 from . import reader as world
 
 
@@ -49,7 +50,8 @@ REPORT_ERROR_NORMALS = 64
 def compute_and_store(scene, capture_width=None, error_normals=0, nonfinite="raise"):
     """Compute from World: ``world.world_coefficients`` stored on ``scene`` (``scene_data.store``,
     source "WORLD": they are also the Reset values), and the lights Extract Lights made deleted
-    (``design.lights.remove_lights``: the whole world is in the SH again).
+    (``design.lights.remove_lights``: the whole world is in the SH again); the world's
+    prefiltered maps, if Apply made them, are rewritten (``shading.glossy.follow_world``).
 
     ``capture_width`` None: the scene's override, else the add-on preferences', else 256 (an
     odd width rounded up). ``error_normals`` > 0: the ``WorldInfo`` also holds the 9-term error
@@ -65,6 +67,7 @@ def compute_and_store(scene, capture_width=None, error_normals=0, nonfinite="rai
                                             error_normals=error_normals, nonfinite=nonfinite)
     stored = scene_data.store(scene, coeffs, world_provenance(info))
     lights.remove_lights(scene)  # the whole world is in the SH again: no extracted light
+    glossy.follow_world(scene)  # the prefiltered reflections of an applied Keep BSDF follow
     return stored, info
 
 

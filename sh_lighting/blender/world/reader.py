@@ -455,3 +455,19 @@ def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0
         error_normals=error_normals if error is not None else 0,
     )
     return coeffs, info
+
+
+def world_radiance(scene, capture_width=256):
+    """``scene``'s world as an equirect map, for what needs its radiance rather than its nine
+    terms (``shading.glossy``): (pixels (H, W, 3 or 4) float32 rows top to bottom, Strength,
+    Mapping XYZ Euler or None). An equirect image is read as Compute reads it (NaN/Inf texels
+    black); any other world is captured by Cycles at ``capture_width`` (then Strength 1, no
+    rotation: the capture is the world as it shows). WorldError when it cannot be read."""
+    source = read_world(scene)
+    if isinstance(source, ImageSource) and source.projection == "EQUIRECTANGULAR":
+        return zero_nonfinite(source.pixels()), source.strength, source.rotation
+    try:
+        pixels = capture_world(scene.world, capture_width, frame=scene.frame_current)
+    except CaptureError as error:
+        raise WorldError(f"world '{scene.world.name}' could not be captured: {error}") from None
+    return zero_nonfinite(pixels), 1.0, None

@@ -1,0 +1,299 @@
+"""EEVEE's glossy reflections of the world under Keep BSDF, given back by prefiltered maps.
+
+Keep BSDF hides the world from EEVEE's lighting (``world_diffuse``), which also takes its
+reflections away. They are added back to each material as an emission seen by EEVEE only:
+
+* **Maps**: the world prefiltered with GGX at ``core.glossy.ROUGHNESS_LEVELS`` (equirect, in
+  world directions, the Mapping rotation and Strength applied), stored as packed float images
+  marked ``IMAGE_MARKER`` (so the .blend renders them where the add-on is not installed).
+  ``write_maps`` is their one write path: Apply makes them when the world has none, Compute
+  from World rewrites them in place when it has (the materials follow without re-Apply).
+* **Nodes** (``add_eevee_reflections``): a Material Output of target EEVEE (Cycles keeps its
+  own output, unchanged) whose Surface is what the material renders (BSDF + SH diffuse) plus
+  an Emission of, for each Principled BSDF of the surface,
+
+      coverage · P(r, R) · (F0 · A(r, n·v) + B(r, n·v)),
+
+  R the view reflected about its Normal, P the maps looked up at R by Environment Texture
+  nodes and interpolated linearly in its Roughness r, A and B the split sum's terms read from
+  a 16 × 16 table image (``core.glossy.environment_brdf_table``, packed once per file), with
+  the multiple-scattering term added (``core.glossy``), F0 = (1 − Metallic) F0_IOR +
+  Metallic · Base Color, coverage its Mix factors and Alpha. Every input is followed
+  (``keep_bsdf.Builder``). Remove deletes these nodes and, once no material keeps its BSDF,
+  every image made here (``remove_maps``).
+  Other shaders that reflect (Glossy, Glass, Anisotropic, ... BSDFs) and the Coat and Sheen
+  layers are not modelled: ``unmodelled`` names them for Apply's report.
+"""
+
+import json
+
+import bpy
+import numpy as np
+
+from ...core.glossy import ROUGHNESS_LEVELS, environment_brdf_table, level_maps
+from .. import compat
+from ..node_links import source_socket
+from ..world.reader import WorldError, read_world, world_radiance
+from .keep_bsdf import PRINCIPLED, coverage_factors, dielectric_f0, product
+
+# Custom property of the images made here: JSON {"world": world name, "roughness": level}.
+IMAGE_MARKER = "sh_lighting_glossy"
+LABEL = "SH glossy"
+# Shaders with reflections the maps do not give back in EEVEE (4.2-5.0 names).
+UNMODELLED_SHADERS = frozenset({
+    "ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic", "ShaderNodeBsdfMetallic",
+    "ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction", "ShaderNodeBsdfSheen",
+    "ShaderNodeBsdfToon",
+})
+# Principled layers whose reflections are not modelled, when their weight is not 0.
+UNMODELLED_LAYERS = ("Coat Weight", "Sheen Weight")
+
+
+def _record(image):
+    try:
+        return json.loads(image[IMAGE_MARKER])
+    except (KeyError, ValueError, TypeError):
+        return None
+
+
+def maps_of(world):
+    """The images ``write_maps`` made for ``world``, one per roughness level in order, or
+    None when there is not a full set."""
+    if world is None:
+        return None
+    found = {}
+    for image in bpy.data.images:
+        record = _record(image) if IMAGE_MARKER in image else None
+        if record is not None and record.get("world") == world.name and image.library is None:
+            found[record.get("roughness")] = image
+    if any(r not in found for r in ROUGHNESS_LEVELS):
+        return None
+    return [found[r] for r in ROUGHNESS_LEVELS]
+
+
+def write_maps(scene):
+    """Prefilter ``scene``'s world (``core.glossy.level_maps``) into its images, made or
+    rewritten in place; returns them. WorldError (nothing written) when it cannot be read."""
+    world = scene.world
+    if world is None:
+        raise WorldError(f"scene '{scene.name}' has no world to reflect")
+    pixels, strength, euler = world_radiance(scene)
+    levels = level_maps(pixels, strength, euler)
+    images = maps_of(world) or [None] * len(ROUGHNESS_LEVELS)
+    written = []
+    for r, level, image in zip(ROUGHNESS_LEVELS, levels, images):
+        height, width = level.shape[:2]
+        if image is None:
+            image = bpy.data.images.new(f"{LABEL} {world.name} r{r:.2f}", width, height,
+                                        alpha=False, float_buffer=True)
+            image[IMAGE_MARKER] = json.dumps({"world": world.name, "roughness": r})
+        elif tuple(image.size) != (width, height):
+            image.scale(width, height)
+        image.colorspace_settings.name = compat.working_space()  # that of the pixels
+        rgba = np.ones((height, width, 4), dtype=np.float32)
+        rgba[..., :3] = level[::-1]  # Image.pixels are bottom row first
+        image.pixels.foreach_set(rgba.ravel())
+        image.pack()
+        written.append(image)
+    return written
+
+
+def follow_world(scene):
+    """Rewrite the maps of ``scene``'s world if it has them (Compute from World); True if so."""
+    if maps_of(scene.world) is None:
+        return False
+    write_maps(scene)
+    return True
+
+
+def remove_maps():
+    """Delete every image ``write_maps`` made (Remove, once no material uses them)."""
+    for image in [i for i in bpy.data.images if IMAGE_MARKER in i and i.library is None]:
+        bpy.data.images.remove(image)
+
+
+def unmodelled(leaves):
+    """Names of the shaders and layers among ``leaves`` (``diffuse_weight.surface_leaves``)
+    whose reflections the maps do not give back."""
+    names = []
+    for leaf in leaves:
+        node = leaf.node
+        if node.bl_idname in UNMODELLED_SHADERS:
+            names.append(f"{node.bl_label} '{node.name}'")
+        elif node.bl_idname == PRINCIPLED:
+            for layer in UNMODELLED_LAYERS:
+                socket = node.inputs.get(layer)
+                if socket is not None and (socket.is_linked or socket.default_value > 0.0):
+                    names.append(f"{layer.split()[0]} of '{node.name}'")
+    return names
+
+
+def _vector(b, operation, *operands):
+    """A Vector Math node of ``operands`` (output sockets or numbers, a number filling a
+    vector); for "SCALE" the second is the scale. Returns its output socket."""
+    node = b.node("ShaderNodeVectorMath", f"{LABEL} ({operation.lower()})", operation=operation)
+    sockets = list(node.inputs)
+    if operation == "SCALE":
+        sockets = [node.inputs[0], node.inputs["Scale"]]
+    for socket, value in zip(sockets, operands):
+        if not isinstance(value, (int, float)):
+            b.tree.links.new(value, socket)
+        elif socket.type == "VECTOR":
+            socket.default_value = (value, value, value)
+        else:
+            socket.default_value = value
+    return node.outputs["Value" if operation == "DOT_PRODUCT" else "Vector"]
+
+
+def _lookup(b, images, reflected, roughness):
+    """The maps at ``reflected``, linearly interpolated between the levels by ``roughness``."""
+    result = None
+    for index, (r, image) in enumerate(zip(ROUGHNESS_LEVELS, images)):
+        texture = b.node("ShaderNodeTexEnvironment", f"{LABEL} r = {r:.2f}", image=image,
+                         interpolation="Linear", projection="EQUIRECTANGULAR")
+        b.tree.links.new(reflected, texture.inputs["Vector"])
+        if result is None:
+            result = texture.outputs["Color"]
+            continue
+        previous = ROUGHNESS_LEVELS[index - 1]
+        step = r - previous
+        fac = b.math("MULTIPLY_ADD", roughness, 1.0 / step, -previous / step, label=LABEL,
+                     clamp=True)
+        mix = b.node("ShaderNodeMix", f"{LABEL} (between levels)", data_type="RGBA")
+        b.tree.links.new(fac, mix.inputs["Factor"])
+        b.tree.links.new(result, mix.inputs[6])  # A (colour)
+        b.tree.links.new(texture.outputs["Color"], mix.inputs[7])  # B (colour)
+        result = mix.outputs[2]  # Result (colour)
+    return result
+
+
+def _specular(b, table, roughness, n_dot_v, f0):
+    """The colour socket of the split sum's reflectance with the multiple-scattering term
+    (``core.glossy``): (A, B) read from ``table`` at (n·v, r), then
+    F0 A + B + (F0 A + B) F_avg (1 − E) / (1 − F_avg (1 − E))."""
+    where = b.node("ShaderNodeCombineXYZ", f"{LABEL} (n·v, roughness)")
+    b.tree.links.new(n_dot_v, where.inputs["X"])
+    b.tree.links.new(roughness, where.inputs["Y"])
+    lookup = b.node("ShaderNodeTexImage", f"{LABEL}: split sum (A, B)", image=table,
+                    interpolation="Linear", extension="EXTEND")
+    b.tree.links.new(where.outputs[0], lookup.inputs["Vector"])
+    parts = b.node("ShaderNodeSeparateXYZ", f"{LABEL} (A, B)")
+    b.tree.links.new(lookup.outputs["Color"], parts.inputs[0])
+    scale, bias = parts.outputs["X"], parts.outputs["Y"]
+    single = _vector(b, "MULTIPLY_ADD", f0, scale, bias)  # F0 A + B
+    missing = b.math("SUBTRACT", 1.0, b.math("ADD", scale, bias, label=LABEL), label=LABEL)
+    average = _vector(b, "MULTIPLY_ADD", f0, 20.0 / 21.0, 1.0 / 21.0)  # F0 + (1 − F0)/21
+    lost = _vector(b, "SCALE", average, missing)
+    gain = _vector(b, "DIVIDE", _vector(b, "MULTIPLY", single, lost),
+                   _vector(b, "SUBTRACT", 1.0, lost))
+    return _vector(b, "ADD", single, gain)
+
+
+def _leaf_reflection(b, leaf, images, table, geometry):
+    """The colour socket of one Principled leaf's glossy reflection (module docstring)."""
+    bsdf = leaf.node
+    normal = source_socket(bsdf.inputs["Normal"]) or geometry.outputs["Normal"]
+    incoming = geometry.outputs["Incoming"]
+    # Vector Math Reflect gives I − 2 (I·N) N = −R
+    reflected = _vector(b, "SCALE", _vector(b, "REFLECT", incoming, normal), -1.0)
+    roughness = b.math("MAXIMUM", ("follow", bsdf.inputs["Roughness"]), 0.0, label=LABEL,
+                       clamp=True)
+    n_dot_v = b.math("MAXIMUM", _vector(b, "DOT_PRODUCT", normal, incoming), 1e-4, label=LABEL,
+                     clamp=True)
+    metallic = bsdf.inputs["Metallic"]
+    f0 = dielectric_f0(b, bsdf, label=LABEL)
+    base = b.node("ShaderNodeVectorMath", f"{LABEL} (metal F0)", operation="SCALE")
+    b.follow(base.inputs[0], bsdf.inputs["Base Color"])
+    b.follow(base.inputs["Scale"], metallic)
+    dielectric = b.math("MULTIPLY", f0 if f0 is not None else 0.04,
+                        b.math("SUBTRACT", 1.0, ("follow", metallic), label=LABEL), label=LABEL)
+    specular = _specular(b, table, roughness, n_dot_v,
+                         _vector(b, "ADD", base.outputs["Vector"], dielectric))
+    weight = product(b, coverage_factors(b, leaf), label=LABEL)
+    if not isinstance(weight, float):
+        specular = _vector(b, "MULTIPLY", specular, weight)
+    return _vector(b, "MULTIPLY", _lookup(b, images, reflected, roughness), specular)
+
+
+def maps_for(scene):
+    """(the maps of ``scene``'s world, written first if it has none, the split sum's table
+    image); None when the world cannot be read (``reflection_problem`` says why)."""
+    images = maps_of(scene.world)
+    try:
+        images = images or write_maps(scene)
+    except WorldError:
+        return None
+    return images, table_image()
+
+
+def table_image():
+    """The file's image of ``core.glossy.environment_brdf_table`` (A in red, B in green),
+    made and packed when missing."""
+    for image in bpy.data.images:
+        if image.library is None and (_record(image) or {}).get("table") == "split sum":
+            return image
+    table = environment_brdf_table()
+    size = table.shape[0]
+    image = bpy.data.images.new(f"{LABEL} split sum", size, size, alpha=False,
+                                float_buffer=True)
+    image.colorspace_settings.name = "Non-Color"
+    image[IMAGE_MARKER] = json.dumps({"table": "split sum"})
+    rgba = np.ones((size, size, 4), dtype=np.float32)
+    rgba[..., :2] = table  # row 0 (r near 0) is Image.pixels' first, bottom row: v = r
+    image.pixels.foreach_set(rgba.ravel())
+    image.pack()
+    return image
+
+
+def reflection_problem(scene):
+    """Why ``scene``'s world has no maps to reflect, or None when it has them (or there is no
+    world: nothing to reflect, in EEVEE's own lighting either)."""
+    if scene.world is None or maps_of(scene.world) is not None:
+        return None
+    try:
+        read_world(scene)
+    except WorldError as error:
+        return str(error)
+    return "no Principled BSDF asked for them"
+
+
+def add_eevee_reflections(b, leaves, outputs, active, maps):
+    """Add the world's reflections off the Principled BSDFs among ``leaves`` (the surface's,
+    ``diffuse_weight.surface_leaves``) to what EEVEE renders (module docstring): to each
+    Material Output of ``outputs`` whose target is EEVEE, else to a new one (appended to
+    ``b.added``) with the links of ``active``. ``maps``: returns the images or None (then,
+    like without a Principled BSDF, nothing is added). True when added."""
+    principled = [leaf for leaf in leaves if leaf.node.bl_idname == PRINCIPLED]
+    found = maps() if principled else None
+    if found is None:
+        return False
+    images, table = found
+    geometry = b.node("ShaderNodeNewGeometry", LABEL)
+    total = None
+    for leaf in principled:
+        colour = _leaf_reflection(b, leaf, images, table, geometry)
+        total = colour if total is None else _vector(b, "ADD", total, colour)
+    emission = b.node("ShaderNodeEmission", f"{LABEL}: the world's reflections (EEVEE)")
+    b.tree.links.new(total, emission.inputs["Color"])
+    emission.inputs["Strength"].default_value = 1.0
+    targets = [output for output in outputs if output.target == "EEVEE"]
+    if not targets:
+        output = b.node("ShaderNodeOutputMaterial", "SH Lighting: EEVEE Material Output",
+                        target="EEVEE")
+        for socket in active.inputs:
+            for link in socket.links:
+                copy = b.tree.links.new(link.from_socket, output.inputs[socket.identifier])
+                copy.is_muted = link.is_muted
+        active.is_active_output = True
+        targets = [output]
+    for output in targets:
+        surface = output.inputs["Surface"]
+        original = source_socket(surface)
+        if original is None:
+            b.tree.links.new(emission.outputs[0], surface)
+            continue
+        add = b.node("ShaderNodeAddShader", "BSDF + SH diffuse + SH glossy (EEVEE)")
+        b.tree.links.new(original, add.inputs[0])
+        b.tree.links.new(emission.outputs[0], add.inputs[1])
+        b.tree.links.new(add.outputs[0], surface)
+    return True
