@@ -174,8 +174,11 @@ def _second_fit(scene, second, first_camera, albedo, margin, clip):
                                   first_camera.projection, first_camera.focal_mm,
                                   first_camera.sensor_mm)
     source = read_photo(second.path)
-    fit = fit_photo(source.pixels, second.circle, camera, albedo=albedo, margin=margin,
-                    clip=_clipped(source, clip), prior="none")
+    try:
+        fit = fit_photo(source.pixels, second.circle, camera, albedo=albedo, margin=margin,
+                        clip=_clipped(source, clip), prior="none")
+    except PhotoError as error:
+        raise PhotoError(f"second photo '{os.path.basename(source.path)}': {error}") from None
     record = {"file": os.path.basename(source.path),
               "circle": [float(v) for v in second.circle], **record,
               "residual": fit.residual, "used": fit.used}

@@ -167,6 +167,7 @@ def hostile_photos(folder):
     ("no camera", "no camera: set the scene's camera"),
     ("no second photo", "the second-photo prior needs a second photo"),
     ("no chrome ball", "chrome ball '"),
+    ("black second photo", "second photo 'black.png': the ball is black"),
 ])
 def test_hostile_input_one_line_and_nothing_changed(case, message, photos, addon, tmp_path):
     scene, _ = grey_ball_scene(photos["sh_world"])
@@ -175,9 +176,11 @@ def test_hostile_input_one_line_and_nothing_changed(case, message, photos, addon
     paths = hostile_photos(tmp_path)
     cx, cy, r = circle_of("ORTHO")
     path, circle = photos["sh_png"], (cx, cy, r)
-    prior, chrome = "mirror", ""
+    prior, chrome, second = "mirror", "", ""
     if case == "no second photo":
         prior = "photo"
+    elif case == "black second photo":
+        prior, second = "photo", paths["black"]
     elif case == "no chrome ball":
         prior, chrome = "chrome", str(tmp_path / "no_chrome.exr")
     elif case == "outside":
@@ -197,7 +200,7 @@ def test_hostile_input_one_line_and_nothing_changed(case, message, photos, addon
         SHLIGHT_OT_match_photo, filepath=path, circle=circle, albedo=0.18, margin=0.05,
         prior=prior, camera="SCENE", direction=(0.0, 1.0, 0.0), roll=0.0,
         projection="ORTHO", focal_mm=85.0, sensor_mm=36.0, clip=0.0, chrome_filepath=chrome,
-        second_filepath="", second_circle=(0.0, 0.0, 0.0), second_direction=(0.0, -1.0, 0.0),
+        second_filepath=second, second_circle=(cx, cy, r), second_direction=(0.0, -1.0, 0.0),
         second_roll=0.0)
     assert result == {"CANCELLED"}
     (kinds, text), = reports
