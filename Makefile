@@ -22,11 +22,16 @@ $(LTS_STAMP): requirements-lts.txt
 demo: $(STAMP)
 	$(PY) -m tools.demo $(HDRI)
 
+# pytest-xdist workers for test: one test file per worker at a time (module
+# fixtures are built once); JOBS=0 runs everything in one process.
+JOBS ?= 2
+XDIST := -n $(JOBS) --dist loadfile --no-loadscope-reorder
+
 # Lint for real errors (undefined names, unused imports), then the whole suite (slow tests
 # included; the GUI session and the benchmarks are targets of their own).
 test: $(STAMP)
 	$(PY) -m ruff check --select F,E9 sh_lighting tests tools benchmarks
-	$(PY) -m pytest
+	$(PY) -m pytest $(XDIST)
 
 # The tests whose outcome depends on the Blender version, on Blender 4.2 LTS (the oldest the
 # manifest promises): tests/blender and tests/farm. tests/core and tests/interop need numpy

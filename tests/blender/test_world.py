@@ -127,7 +127,9 @@ def snapshot():
     if world is not None:
         state["camera_visible"] = world.cycles_visibility.camera
         state["sampling"] = world.cycles.sampling_method
-    state["temp"] = sorted(glob.glob(os.path.join(tempfile.gettempdir(), "sh_lighting_capture_*")))
+    # This process's captures only: other test runs (and xdist workers) capture meanwhile.
+    state["temp"] = sorted(glob.glob(os.path.join(tempfile.gettempdir(),
+                                                  f"sh_lighting_capture_{os.getpid()}_*")))
     return state
 
 
