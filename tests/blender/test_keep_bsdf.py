@@ -22,7 +22,7 @@ from benchmarks.shadow_scene import (
     principled_material,
 )
 from sh_lighting import api
-from sh_lighting.blender.shading import glossy, keep_bsdf, materials
+from sh_lighting.blender.shading import glossy, keep_bsdf, materials, notes
 from sh_lighting.core import project_equirect
 
 SIZE = 48
@@ -232,3 +232,21 @@ def test_the_worlds_prefiltered_maps_follow_compute_and_go_with_remove(addon, hd
     materials.remove_from_materials(mats)
     assert [len(m.node_tree.nodes) for m in mats] == counts
     assert not [image for image in bpy.data.images if glossy.IMAGE_MARKER in image]
+
+
+def test_a_world_hidden_from_glossy_rays_gets_no_reflection_maps(addon, hdri_dir, tmp_path):
+    """World > Ray Visibility > Glossy off: Cycles shows no reflections of the world, so EEVEE
+    gets no maps either (none made, no EEVEE output added), and Apply's report says why."""
+    s = ShadowScene(hdri_dir / "forest.exr", 8, tmp_path)
+    s.sphere.data.materials[0] = principled_material("Glossy", Metallic=0.8, Roughness=0.5)
+    s.world.cycles_visibility.glossy = False
+    api.compute_from_world(s.scene)
+    mats = materials.materials_of(s.scene.objects)
+    materials.apply_to_materials(mats, s.scene, "KEEP_BSDF")
+    assert not [image for image in bpy.data.images if glossy.IMAGE_MARKER in image]
+    targets = {n.target for m in mats for n in m.node_tree.nodes
+               if n.bl_idname == "ShaderNodeOutputMaterial"}
+    assert "EEVEE" not in targets
+    note = notes.reflection_note(s.scene, [m.name for m in mats])
+    assert note == (f"EEVEE shows no reflections of the world: World '{s.world.name}' has "
+                    "Glossy ray visibility off (Cycles shows no reflections of it either)")

@@ -218,6 +218,8 @@ def _leaf_reflection(b, leaf, images, table, geometry):
 def maps_for(scene):
     """(the maps of ``scene``'s world, written first if it has none, the split sum's table
     image); None when the world cannot be read (``reflection_problem`` says why)."""
+    if not shows_reflections(scene.world):
+        return None
     images = maps_of(scene.world)
     try:
         images = images or write_maps(scene)
@@ -245,9 +247,18 @@ def table_image():
     return image
 
 
+def shows_reflections(world):
+    """Whether ``world`` is seen by glossy rays (World > Ray Visibility > Glossy): when it is
+    not, Cycles shows no reflections of it, and neither do the maps in EEVEE."""
+    return world is None or world.cycles_visibility.glossy
+
+
 def reflection_problem(scene):
     """Why ``scene``'s world has no maps to reflect, or None when it has them (or there is no
     world: nothing to reflect, in EEVEE's own lighting either)."""
+    if not shows_reflections(scene.world):
+        return (f"World '{scene.world.name}' has Glossy ray visibility off (Cycles shows no "
+                "reflections of it either)")
     if scene.world is None or maps_of(scene.world) is not None:
         return None
     try:
