@@ -22,7 +22,7 @@ $(LTS_STAMP): requirements-lts.txt
 demo: $(STAMP)
 	$(PY) -m tools.demo $(HDRI)
 
-# pytest-xdist workers for test: one test file per worker at a time (module
+# pytest-xdist workers for test and test-lts: one test file per worker at a time (module
 # fixtures are built once); JOBS=0 runs everything in one process.
 JOBS ?= 2
 XDIST := -n $(JOBS) --dist loadfile --no-loadscope-reorder
@@ -37,7 +37,7 @@ test: $(STAMP)
 # manifest promises): tests/blender and tests/farm. tests/core and tests/interop need numpy
 # only, the same numpy 1.26.4 in both environments, so `make test` has run them already.
 test-lts: $(LTS_STAMP)
-	$(LTS_VENV)/bin/python -m pytest tests/blender tests/farm
+	$(LTS_VENV)/bin/python -m pytest $(XDIST) tests/blender tests/farm
 
 # The add-on in a real Blender window, driven by clicks and key presses (tests/gui). By
 # default Debian's Blender in the root tools/blender_gui_root.sh builds (needs root; the root
