@@ -250,3 +250,20 @@ def test_a_world_hidden_from_glossy_rays_gets_no_reflection_maps(addon, hdri_dir
     note = notes.reflection_note(s.scene, [m.name for m in mats])
     assert note == (f"EEVEE shows no reflections of the world: World '{s.world.name}' has "
                     "Glossy ray visibility off (Cycles shows no reflections of it either)")
+
+
+def test_compute_reads_the_world_once_for_the_terms_and_the_maps(addon, hdri_dir, tmp_path,
+                                                               monkeypatch):
+    """Compute from World with the maps made: one readback of the world image serves the nine
+    terms and the maps (``WorldInfo.radiance``), not one each."""
+    from sh_lighting.blender.world import reader
+
+    s = ShadowScene(hdri_dir / "forest.exr", 8, tmp_path)
+    s.sphere.data.materials[0] = principled_material("Glossy", Metallic=0.8, Roughness=0.5)
+    api.compute_from_world(s.scene)
+    materials.apply_to_materials(materials.materials_of(s.scene.objects), s.scene, "KEEP_BSDF")
+    reads = []
+    readback = reader.linear_pixels
+    monkeypatch.setattr(reader, "linear_pixels", lambda image: reads.append(1) or readback(image))
+    api.compute_from_world(s.scene)
+    assert len(reads) == 1 and glossy.maps_of(s.world) is not None

@@ -71,13 +71,14 @@ def maps_of(world):
     return [found[r] for r in ROUGHNESS_LEVELS]
 
 
-def write_maps(scene):
+def write_maps(scene, radiance=None):
     """Prefilter ``scene``'s world (``core.glossy.level_maps``) into its images, made or
-    rewritten in place; returns them. WorldError (nothing written) when it cannot be read."""
+    rewritten in place; returns them. ``radiance``: the world already read (``world_radiance``'s
+    result), else it is read here. WorldError (nothing written) when it cannot be read."""
     world = scene.world
     if world is None:
         raise WorldError(f"scene '{scene.name}' has no world to reflect")
-    pixels, strength, euler = world_radiance(scene)
+    pixels, strength, euler = radiance or world_radiance(scene)
     levels = level_maps(pixels, strength, euler)
     images = maps_of(world) or [None] * len(ROUGHNESS_LEVELS)
     written = []
@@ -98,11 +99,12 @@ def write_maps(scene):
     return written
 
 
-def follow_world(scene):
-    """Rewrite the maps of ``scene``'s world if it has them (Compute from World); True if so."""
+def follow_world(scene, radiance=None):
+    """Rewrite the maps of ``scene``'s world if it has them (Compute from World, which passes
+    the ``radiance`` it read: ``write_maps``); True if so."""
     if maps_of(scene.world) is None:
         return False
-    write_maps(scene)
+    write_maps(scene, radiance)
     return True
 
 

@@ -63,11 +63,14 @@ def compute_and_store(scene, capture_width=None, error_normals=0, nonfinite="rai
         capture_width = properties.capture_width_for(
             getattr(scene, "sh_lighting", None), preferences.addon_preferences()
         )
+    reflected = glossy.maps_of(scene.world) is not None  # Apply made the world's maps
     coeffs, info = world.world_coefficients(scene, capture_width=_whole(capture_width),
-                                            error_normals=error_normals, nonfinite=nonfinite)
+                                            error_normals=error_normals, nonfinite=nonfinite,
+                                            keep_radiance=reflected)
     stored = scene_data.store(scene, coeffs, world_provenance(info))
     lights.remove_lights(scene)  # the whole world is in the SH again: no extracted light
-    glossy.follow_world(scene)  # the prefiltered reflections of an applied Keep BSDF follow
+    if reflected:  # the prefiltered reflections of an applied Keep BSDF follow, same read
+        glossy.follow_world(scene, info.radiance)
     return stored, info
 
 

@@ -68,7 +68,8 @@ class WorldInfo:
     space of the coefficients. ``elapsed`` is the wall time in seconds. ``error``: the
     9-term error (mean, max) against the world's brute-force irradiance at ``error_normals``
     normals (``irradiance.error_estimate``), when it was asked for and could be measured (an
-    equirect image or a capture with light in every channel), else None.
+    equirect image or a capture with light in every channel), else None. ``radiance``: see
+    ``world_coefficients``' ``keep_radiance``.
     """
 
     source: str
@@ -83,6 +84,9 @@ class WorldInfo:
     capture_width: int | None = None
     error: tuple[float, float] | None = None
     error_normals: int = 0
+    # (pixels, Strength, Mapping Euler or None) as ``world_radiance`` gives them, when
+    # ``world_coefficients`` was asked to keep them (else None): the same read serves both.
+    radiance: tuple | None = field(default=None, repr=False, compare=False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -391,7 +395,7 @@ def _error(pixels, coeffs, count):
 
 
 def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0,
-                       nonfinite="raise"):
+                       nonfinite="raise", keep_radiance=False):
     """(9, 3) float64 L_lm of ``scene``'s world as Cycles renders it, and a ``WorldInfo``.
 
     ``read_world`` decides: an image is projected (``core``), anything else is captured by
@@ -399,7 +403,9 @@ def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0
     ``error_normals`` > 0 also measures the 9-term error against the world's brute-force
     irradiance at that many normals (``WorldInfo.error``, ``irradiance.error_estimate``; not
     for mirror-ball images), which costs that many passes over a map at most about 512 wide.
-    ``nonfinite`` "zero": NaN/Inf texels of a world image count as black. Raises WorldError (a ValueError) when the world
+    ``nonfinite`` "zero": NaN/Inf texels of a world image count as black. ``keep_radiance``:
+    the ``WorldInfo`` also holds the map read (``world_radiance``'s result; None for a mirror
+    ball), so that what needs the radiance too reads the world once. Raises WorldError (a ValueError) when the world
     cannot give any lighting.
     """
     if nonfinite not in ("raise", "zero"):
@@ -430,6 +436,8 @@ def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0
             strength=source.strength,
             error=error,
             error_normals=error_normals if error is not None else 0,
+            radiance=((zero_nonfinite(pixels), source.strength, source.rotation)
+                      if keep_radiance and source.projection == "EQUIRECTANGULAR" else None),
         )
         return coeffs, info
     try:
@@ -453,6 +461,7 @@ def world_coefficients(scene, capture_width=256, depsgraph=None, error_normals=0
         capture_width=int(capture_width),
         error=error,
         error_normals=error_normals if error is not None else 0,
+        radiance=(zero_nonfinite(pixels), 1.0, None) if keep_radiance else None,
     )
     return coeffs, info
 
