@@ -10,7 +10,8 @@ allocations are traced (``tracemalloc`` peak). Stages and their floors:
 * decode: Blender loading the file (``Image.size`` read) — the floor of everything else;
 * readback: ``images.linear_pixels`` (``foreach_get``; 8-bit: the sRGB decoding) — floor: decode;
 * projection (``project_equirect``), error estimate (``irradiance.error_estimate``, 256
-  normals), Extract Lights (``core.lights.extract_lights``, 2 lights), specular cube
+  normals), Extract Lights (``core.lights.extract_lights``, 2 lights, as ``compute --lights 2``
+  calls it after the estimate), specular cube
   (``gltf.specular_cube``), file writing (the .gltf text with its cube, written) — floor: one
   numpy pass (``pixels.sum()``) over the same float32 RGBA pixels, timed in alternation;
 * memory floor: the decoded image's size in memory (H × W × 4 float32).
@@ -143,17 +144,21 @@ def measure(path, stage, repeats=REPEATS):
 
 
 def _stage_function(stage, pixels, path):
-    from sh_lighting.core.irradiance import error_estimate
+    from sh_lighting.core.irradiance import bounded_error_estimate, error_estimate
     from sh_lighting.core.lights import extract_lights
     from sh_lighting.core.projection import project_equirect
     from sh_lighting.formats.gltf import gltf_text, specular_cube
 
     coeffs = project_equirect(pixels)
     out = Path(path).with_suffix(".gltf")
+    made = bounded_error_estimate(pixels, coeffs, 256)["downsample"] if stage == "lights" else None
     return {
         "projection": lambda: project_equirect(pixels),
         "estimate": lambda: error_estimate(pixels, coeffs, 256),
-        "lights": lambda: extract_lights(pixels, 2),
+        # what `compute --lights 2` adds (``hdri.hdri_lights``): the projection and the
+        # estimate's downsample reused, no copy of the rest
+        "lights": lambda: extract_lights(pixels, 2, coefficients=coeffs, keep_rest=False,
+                                         downsample=made),
         "cube": lambda: specular_cube(pixels),
         "write": lambda: out.write_text(gltf_text(coeffs, pixels), encoding="utf-8"),
     }[stage]

@@ -58,7 +58,14 @@ class NonFiniteError(ValueError):
 
 
 def check_finite_pixels(pixels):
-    """``pixels`` unchanged, or a ValueError counting and locating its NaN/Inf RGB texels."""
+    """``pixels`` unchanged, or a ValueError counting and locating its NaN/Inf RGB texels.
+
+    A finite sum of all the values (one pass, no temporary) means every one is finite; only
+    otherwise (a NaN or Inf somewhere, alpha included, or an overflowing sum) is each RGB
+    value tested."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        if np.isfinite(np.sum(pixels)):
+            return pixels
     if not np.isfinite(pixels[..., :3]).all():
         raise NonFiniteError(describe_nonfinite(pixels)[1])
     return pixels

@@ -313,7 +313,7 @@ def error_estimate(pixels, coeffs, count=256, reference_width=ESTIMATE_WIDTH):
 
 
 def bounded_error_estimate(pixels, coeffs, count=256, reference_width=ESTIMATE_WIDTH):
-    """{"mean", "max", "bound", "reference_size"}: the 9-term irradiance error / total power
+    """{"mean", "max", "bound", "reference_size", "downsample"}: the 9-term irradiance error / total power
     ∫L dω of an equirect map, or None (a channel without light).
 
     The paper's measure (``relative_error``): |E9 − E| at ``count`` normals
@@ -326,29 +326,41 @@ def bounded_error_estimate(pixels, coeffs, count=256, reference_width=ESTIMATE_W
     reference grows with the width): E changes by at most Σ_B d_B Σ_t Ω_t |L_t − L̄_B| per
     channel (``downsample`` module docstring), so "mean" and "max" are each within "bound" (that
     over the power, the largest channel's; 0 at full resolution) of the full-resolution values.
-    "reference_size" is the (height, width) the reference was computed at.
+    "reference_size" is the (height, width) the reference was computed at, "downsample" the
+    (map, bound) of that downsample (None at full resolution) for a further reference of the
+    same map (``downsampled_reference``).
     """
     power = total_power(coeffs)
     if not (power > 0.0).all():
         return None
     normals = spread_normals(count)
-    reference, spread, size = downsampled_reference(pixels, normals, reference_width)
+    reference, spread, size, made = downsampled_reference(pixels, normals, reference_width,
+                                                          keep=True)
     mean, largest = relative_error(irradiance(coeffs, normals), reference, power)
     return {"mean": mean, "max": largest, "bound": float((spread / power).max()),
-            "reference_size": size}
+            "reference_size": size, "downsample": made}
 
 
-def downsampled_reference(pixels, normals, reference_width=ESTIMATE_WIDTH):
+def downsampled_reference(pixels, normals, reference_width=ESTIMATE_WIDTH, downsample=None,
+                          keep=False):
     """(E, bound, size): ``reference_irradiance`` at unit ``normals`` (N, 3) of ``pixels``
     box-downsampled by a whole factor to about ``reference_width`` wide (None: never), the
     (3,) bound on |E − E_full| of every normal (``downsample``; 0 at full resolution) and
-    the (height, width) it was computed at."""
+    the (height, width) it was computed at.
+
+    ``downsample``: that (map, bound) when already made (``keep`` True appends it to the
+    result, None at full resolution), so that a second reference of the same map at other
+    normals (``lights.extract_lights``) does not pass over the pixels again."""
     a = check_pixels(pixels)
     height, width = a.shape[:2]
     factor = whole_factor(height, width, reference_width) if reference_width else 1
     if factor == 1:
-        return reference_irradiance(a, normals), np.zeros(3), (height, width)
-    source, spread = block_downsample(a, factor, with_bound=True)
+        found = reference_irradiance(a, normals), np.zeros(3), (height, width)
+        return found + (None,) if keep else found
+    if downsample is None or downsample[0].shape[:2] != (height // factor, width // factor):
+        downsample = block_downsample(a, factor, with_bound=True)
+    source, spread = downsample
     if not np.isfinite(source).all():
         check_finite_pixels(a)  # names the texels; else the sums overflowed float64
-    return reference_irradiance(source, normals), spread, source.shape[:2]
+    found = reference_irradiance(source, normals), spread, source.shape[:2]
+    return found + (downsample,) if keep else found

@@ -211,6 +211,29 @@ def project_equirect(pixels, max_order=2, nonfinite="raise"):
         return _combine(a, weights, max_order, nonfinite)
 
 
+def project_texels(values, rows, columns, height, width, max_order=2):
+    """L_lm (eq. 10) of an H × W map that is zero except at texels (``rows``, ``columns``)
+    (index arrays, (N,)) holding ``values`` (N, 3): Σ over those texels of their exact
+    integrals w_l|m|[i] · ∫ {cos mφ, sin |m|φ} over column j (module docstring), in float64.
+
+    What ``project_equirect`` gives for such a map, to rounding, without a pass over the other
+    texels: since the projection is linear, the coefficients of a map changed at a few texels
+    are the old ones plus those of the change (``lights.extract_lights``). A texel listed twice
+    counts twice. Shape ((max_order+1)², 3).
+    """
+    v = np.asarray(values, dtype=np.float64).reshape(-1, 3)
+    rows, columns = np.asarray(rows, dtype=np.intp), np.asarray(columns, dtype=np.intp)
+    row_w = row_weights(height, max_order)[rows]  # (N, θ functions)
+    column_w = _stacked_column_weights(width, max_order)[:, columns]  # (φ functions, N)
+    phi_index = {pair: k for k, pair in enumerate(_phi_functions(max_order))}
+    coeffs = np.zeros((num_coefficients(max_order), 3))
+    for t, (l, m) in enumerate(_theta_functions(max_order)):
+        coeffs[sh_index(l, m)] = (row_w[:, t] * column_w[phi_index[m, 0]]) @ v
+        if m > 0:
+            coeffs[sh_index(l, -m)] = (row_w[:, t] * column_w[phi_index[m, 1]]) @ v
+    return coeffs
+
+
 def _combine(a, weights, max_order, nonfinite):
     """Column sums, the non-finite policy, then the row weights: ((max_order+1)², 3)."""
     sums = column_sums(a, max_order)

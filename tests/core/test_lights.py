@@ -171,8 +171,9 @@ def test_the_luminance_updated_in_row_blocks_is_a_whole_new_one():
 
 
 def test_a_light_that_does_not_help_leaves_the_rest_as_the_map():
-    """Lights are taken out of the rest in place while they are tried: one refused (a halo,
-    NO_GAIN) or none found must leave the rest equal to the input."""
+    """Lights are tried on the rest without a copy of it: one refused (a halo, NO_GAIN) or
+    none found must leave the rest equal to the input; the rest's coefficients, updated by
+    the change at the lights' texels, are its projection to rounding (1e-13 of the largest)."""
     pixels = disc_world(TWO_SUNS)
     # at a normal perpendicular to the first sun the second one does not lower the error
     side = np.array([[1.0, 0.0, -1.0]]) / np.sqrt(2.0)
@@ -184,4 +185,27 @@ def test_a_light_that_does_not_help_leaves_the_rest_as_the_map():
         for light in result.lights:
             rest = core_lights.remove_light(rest, light)
         assert np.array_equal(result.rest, rest)
-        assert np.array_equal(result.coefficients, project_equirect(rest))
+        projected = project_equirect(rest)
+        np.testing.assert_allclose(result.coefficients, projected, rtol=0,
+                                   atol=1e-13 * np.abs(projected).max())
+        if not result.lights:
+            assert np.array_equal(result.coefficients, projected)
+
+
+def test_what_the_caller_made_gives_the_same_extraction_without_the_copy():
+    """The map's own coefficients and the estimate's downsample passed in, and no rest kept
+    (the command line's ``hdri_lights``): the same lights, errors and coefficients."""
+    from sh_lighting.core.irradiance import bounded_error_estimate
+
+    pixels = disc_world(TWO_SUNS)[::-1]  # a flipped view, as Blender's readback
+    coeffs = project_equirect(pixels)
+    made = bounded_error_estimate(pixels, coeffs, 64, reference_width=128)["downsample"]
+    assert made is not None and made[0].shape == (64, 128, 3)
+    plain = core_lights.extract_lights(pixels, count=4)
+    lean = core_lights.extract_lights(pixels, count=4, coefficients=coeffs, keep_rest=False,
+                                      downsample=made)
+    assert lean.rest is None and plain.rest is not None and len(lean.lights) == 2
+    assert lean.errors == plain.errors and lean.stop == plain.stop
+    assert np.array_equal(lean.coefficients, plain.coefficients)
+    for a, b in zip(lean.lights, plain.lights):
+        assert np.array_equal(a.mask, b.mask) and np.array_equal(a.irradiance, b.irradiance)

@@ -158,3 +158,21 @@ def test_result_does_not_depend_on_how_rows_are_shared(monkeypatch, threads, sha
     monkeypatch.setattr(projection, "MAX_THREADS", threads)
     monkeypatch.setattr(projection.os, "sched_getaffinity", lambda _pid: range(threads))
     assert rel_err(project_equirect(pixels, max_order=4), baseline) < ROUNDING
+
+
+def test_the_projection_of_a_few_texels_is_that_of_the_map_holding_them():
+    """project_texels: the exact texel integrals of a map zero but at N texels (repeats add),
+    the same as project_equirect of that map to rounding (lights.extract_lights' update)."""
+    from sh_lighting.core.projection import project_texels
+
+    rng = np.random.default_rng(4)
+    height, width = 48, 96
+    rows, columns = rng.integers(0, height, 80), rng.integers(0, width, 80)
+    rows[:3], columns[:3] = 0, width - 1  # the pole row and the last column, three times
+    values = rng.normal(size=(80, 3)) * 50.0
+    dense = np.zeros((height, width, 3))
+    np.add.at(dense, (rows, columns), values)
+    for order in (2, 4):
+        full = project_equirect(dense, max_order=order)
+        few = project_texels(values, rows, columns, height, width, max_order=order)
+        np.testing.assert_allclose(few, full, rtol=0, atol=1e-13 * np.abs(full).max())

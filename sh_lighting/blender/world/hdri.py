@@ -38,7 +38,8 @@ PROJECTIONS = ("equirect", "mirror_ball")
 class Hdri(NamedTuple):
     """An HDRI file's ``pixels`` (H, W, 4) float32 (non-finite texels zeroed if asked), its
     ``coefficients`` (9, 3) and its ``estimate`` ({"mean", "max"}, or None: a channel without
-    light)."""
+    light); ``downsample``: the estimate's (map, bound) downsample of the pixels, for the
+    lights' reference (``hdri_lights``; None at full resolution or without an estimate)."""
 
     path: Path
     pixels: np.ndarray
@@ -46,6 +47,7 @@ class Hdri(NamedTuple):
     estimate: dict | None
     reference: str = ""  # what the estimate's exact irradiance was computed from
     projection: str = "equirect"  # how the image was read: "equirect" or "mirror_ball"
+    downsample: tuple | None = None
 
 
 @contextmanager
@@ -106,7 +108,8 @@ def read_hdri(path, nonfinite="raise", progress=None, projection="equirect"):
         f" (of the image box-downsampled to {width}x{height}: within "
         f"{100 * bounded['bound']:.2g} % of the power of the full-resolution values)")
     estimate = {"mean": bounded["mean"], "max": bounded["max"]}
-    return Hdri(Path(path), pixels, coeffs, estimate, reference)
+    return Hdri(Path(path), pixels, coeffs, estimate, reference,
+                downsample=bounded["downsample"])
 
 
 def hdri_metadata(hdri):
@@ -134,6 +137,9 @@ def hdri_metadata(hdri):
 
 def hdri_lights(hdri, count):
     """(``core.lights.Extraction``, the rest's (9, 3) coefficients): up to ``count`` compact
-    bright sources of the HDRI taken out as lights (``core.lights.extract_lights``)."""
-    extraction = extract_lights(hdri.pixels, count)
+    bright sources of the HDRI taken out as lights (``core.lights.extract_lights``), from the
+    coefficients and the downsample ``read_hdri`` made, without a copy of the map
+    (``Extraction.rest`` None)."""
+    extraction = extract_lights(hdri.pixels, count, coefficients=hdri.coefficients,
+                                keep_rest=False, downsample=hdri.downsample)
     return extraction, check_coefficients(extraction.coefficients)  # the rest's, projected
