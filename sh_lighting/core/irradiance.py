@@ -149,6 +149,10 @@ def _reference_sums(a, flat_n, rows):
     phi_edges = pi - (2.0 * pi / width) * np.arange(width + 1)  # column j: [phi_edges[j+1], [j]]
     first_column = texel_moments(z_edges[1:], z_edges[:-1], phi_edges[1], phi_edges[0])
     edge = _horizon_margin(theta, width, first_column)  # (H,): |n · V| ≤ edge may cross
+    # the boundary test (_boundary_range) holds for texels less than a quarter turn across
+    small_texels = 2.0 * pi / width + pi / height < 0.5 * pi
+    z_roots = np.sin(theta)  # √(1 − z²) at the row edges
+    phi_trig = np.cos(phi_edges), np.sin(phi_edges)
     phi = column_centres(width)
     trig = np.stack([np.ones(width), np.cos(phi), np.sin(phi)], axis=-1)  # (W, 3)
     result = np.zeros((flat_n.shape[0], 3))
@@ -174,14 +178,68 @@ def _reference_sums(a, flat_n, rows):
         near = _near_horizon(bounds, width)
         for p0 in range(0, near[0].size, KERNEL_PAIRS):
             pair_n, row, col = (index[p0 : p0 + KERNEL_PAIRS] for index in near)
-            kernel = clamped_cosine_integral(flat_n[pair_n], z_edges[row + r0 + 1],
-                                             z_edges[row + r0], phi_edges[col + 1],
-                                             phi_edges[col])
+            texel = (z_edges[row + r0 + 1], z_edges[row + r0], phi_edges[col + 1],
+                     phi_edges[col])
+            if small_texels:  # a third of the texels near the horizon lie wholly above it
+                # (n · V) or below it (0): only those it may cross take the exact kernel
+                lo, hi = _boundary_range(flat_n[pair_n], texel[0], texel[1],
+                                         z_roots[row + r0 + 1], z_roots[row + r0],
+                                         *(t[col + k] for k in (1, 0) for t in phi_trig))
+                above = lo > SIGN_MARGIN
+                cross = ~above & (hi >= -SIGN_MARGIN)
+            else:
+                above, cross = np.zeros(pair_n.size, bool), np.ones(pair_n.size, bool)
+            kernel = np.zeros(pair_n.size)
+            kernel[above] = (texel_moments(*(t[above] for t in texel))
+                             * flat_n[pair_n[above]]).sum(axis=-1)
+            kernel[cross] = clamped_cosine_integral(flat_n[pair_n[cross]],
+                                                    *(t[cross] for t in texel))
             for channel in range(3):
                 result[:, channel] += np.bincount(
                     pair_n, kernel * radiance[row, col, channel], minlength=flat_n.shape[0]
                 )
     return result
+
+
+# n·ω within this of 0 somewhere on a texel's boundary: the texel takes the exact kernel.
+SIGN_MARGIN = 1e-12
+
+
+def _boundary_range(normals, z_lo, z_hi, root_lo, root_hi, c0, s0, c1, s1):
+    """(lo, hi), (P,) each: the least and largest n·ω on the boundary of each texel (z in
+    [z_lo, z_hi], φ in [φ_0, φ_1]) for pairs of unit ``normals`` (P, 3) and texels (P,),
+    given √(1 − z²) at z_lo, z_hi and cos, sin of φ_0, φ_1 (the caller's tables).
+
+    With ω = (√(1 − z²) cos φ, √(1 − z²) sin φ, z), n·ω = n_z z + √(1 − z²) g(φ),
+    g = n_x cos φ + n_y sin φ. Along a parallel the extremes are at the corners or where
+    g' = −n_x sin φ + n_y cos φ changes sign inside (a maximum r = |n_xy| of g where it goes
+    from + to −, a minimum −r where from − to +); along a meridian n·ω = n_z cos θ +
+    g sin θ likewise, its θ-derivative g cos θ − n_z sin θ changing sign inside at ±|(n_z, g)|
+    (each edge shorter than a half turn holds at most one such point). The only critical
+    points inside a texel are ±n, and a texel less than a quarter turn across holding n (−n)
+    lies wholly above (below) the horizon, which its boundary then says: for such texels
+    n·ω > 0 (< 0) on the boundary means on the whole texel (the caller's condition).
+    """
+    nx, ny, nz = normals[:, 0], normals[:, 1], normals[:, 2]
+    r = np.hypot(nx, ny)
+    g0, g1 = nx * c0 + ny * s0, nx * c1 + ny * s1  # g at the two meridians
+    turns0, turns1 = ny * c0 - nx * s0, ny * c1 - nx * s1  # g' there
+    peak, trough = (turns0 > 0.0) & (turns1 < 0.0), (turns0 < 0.0) & (turns1 > 0.0)
+    lo, hi = np.full(len(nz), np.inf), np.full(len(nz), -np.inf)
+    for z, root in ((z_hi, root_hi), (z_lo, root_lo)):
+        base = nz * z
+        for g in (g0, g1):
+            corner = base + root * g
+            lo, hi = np.minimum(lo, corner), np.maximum(hi, corner)
+        hi = np.where(peak, np.maximum(hi, base + root * r), hi)
+        lo = np.where(trough, np.minimum(lo, base - root * r), lo)
+    for g in (g0, g1):
+        rise_a = g * z_hi - nz * root_hi  # d(n·ω)/dθ at θ_a (top) and θ_b
+        rise_b = g * z_lo - nz * root_lo
+        size = np.hypot(nz, g)
+        hi = np.where((rise_a > 0.0) & (rise_b < 0.0), np.maximum(hi, size), hi)
+        lo = np.where((rise_a < 0.0) & (rise_b > 0.0), np.minimum(lo, -size), lo)
+    return lo, hi
 
 
 def _horizon_margin(theta, width, first_column):

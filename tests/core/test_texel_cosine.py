@@ -118,3 +118,32 @@ def test_near_horizon_lists_exactly_the_pairs_a_scan_would_find():
     above = {(kk, ii * width + (first[kk, ii] + c) % width)
              for kk in range(len(n)) for ii in range(height) for c in range(count[kk, ii])}
     assert above == set(zip(*np.nonzero(linear > np.repeat(edge, width)[None, :])))
+
+
+def test_the_texels_the_horizon_misses_are_found_from_their_boundary(monkeypatch):
+    """reference_irradiance gives the exact kernel only the texels near the horizon whose
+    boundary n·ω changes sign (_boundary_range): the range holds every sampled n·ω of the
+    texel, and E is the all-kernel one to rounding."""
+    rng = np.random.default_rng(7)
+    height, width, count = 24, 48, 400
+    n = rng.normal(size=(count, 3))
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    row, col = rng.integers(0, height, count), rng.integers(0, width, count)
+    theta = np.linspace(0.0, pi, height + 1)
+    phi = pi - (2.0 * pi / width) * np.arange(width + 1)
+    z_lo, z_hi = np.cos(theta[row + 1]), np.cos(theta[row])
+    lo, hi = irradiance_module._boundary_range(
+        n, z_lo, z_hi, np.sin(theta[row + 1]), np.sin(theta[row]), np.cos(phi[col + 1]),
+        np.sin(phi[col + 1]), np.cos(phi[col]), np.sin(phi[col]))
+    s = np.linspace(0.0, 1.0, 41)
+    t = theta[row, None, None] + (theta[row + 1] - theta[row])[:, None, None] * s[None, :, None]
+    p = phi[col + 1, None, None] + (phi[col] - phi[col + 1])[:, None, None] * s[None, None, :]
+    dots = (n[:, 0, None, None] * np.sin(t) * np.cos(p) + n[:, 1, None, None] * np.sin(t)
+            * np.sin(p) + n[:, 2, None, None] * np.cos(t))
+    assert (lo <= dots.min(axis=(1, 2)) + 1e-12).all() and (hi >= dots.max(axis=(1, 2)) - 1e-12).all()
+    assert (lo > 0).sum() > 50 and (hi < 0).sum() > 50 and ((lo < 0) & (hi > 0)).sum() > 3
+    pixels = np.random.default_rng(8).random((height, width, 3))
+    normals = spread_normals(60)
+    quick = reference_irradiance(pixels, normals)
+    monkeypatch.setattr(irradiance_module, "SIGN_MARGIN", np.inf)  # every one to the kernel
+    np.testing.assert_allclose(quick, reference_irradiance(pixels, normals), rtol=1e-13)
