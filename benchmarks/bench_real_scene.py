@@ -191,7 +191,13 @@ def _rrmse(image, reference, mask):
     return float(np.sqrt(np.mean(difference ** 2)) / reference[mask].mean())
 
 
-def measure(hdri, size, folder):
+def _chosen(methods, only):
+    """The entries of ``methods`` whose name contains one of the substrings ``only`` (all
+    when None)."""
+    return [m for m in methods if only is None or any(part in m[0] for part in only)]
+
+
+def measure(hdri, size, folder, only=None):
     path = Path(bpy.utils.system_resource("DATAFILES", path="studiolights/world")) / f"{hdri}.exr"
     roles = build_scene(path, size)
     scene = bpy.context.scene
@@ -204,6 +210,8 @@ def measure(hdri, size, folder):
     all_mats = materials.materials_of(scene.objects)
     rows = []
     for index, (name, engine, mode, samples, sampling) in enumerate(METHODS):
+        if (name, engine, mode, samples, sampling) not in _chosen(METHODS, only):
+            continue
         if mode is not None:
             materials.apply_to_materials(all_mats, scene, mode)
             if sampling is not None:
@@ -216,7 +224,9 @@ def measure(hdri, size, folder):
             materials.remove_from_materials(all_mats)
         rows.append(_row(name, image, reference, masks, seconds))
         print(f"{hdri}: {name}: {rows[-1]}", flush=True)
-    transfer, notes = transfer_rows(scene, roles, reference, masks, folder, hdri)
+    if not _chosen(TRANSFER_METHODS, only):
+        return rows, []
+    transfer, notes = transfer_rows(scene, roles, reference, masks, folder, hdri, only)
     return rows + transfer, notes
 
 
@@ -245,7 +255,7 @@ TRANSFER_METHODS = [
 ]
 
 
-def transfer_rows(scene, roles, reference, masks, folder, hdri):
+def transfer_rows(scene, roles, reference, masks, folder, hdri, only=None):
     """Bake the transfer of every object, render ``TRANSFER_METHODS``, then the warm EEVEE
     frame times; (rows, notes: lines for the report)."""
     objects = [obj for group in roles.values() for obj in group]
@@ -256,6 +266,8 @@ def transfer_rows(scene, roles, reference, masks, folder, hdri):
     mats = materials.materials_of(objects)
     rows, lights = [], 0
     for index, (name, engine, mode, samples, count) in enumerate(TRANSFER_METHODS):
+        if (name, engine, mode, samples, count) not in _chosen(TRANSFER_METHODS, only):
+            continue
         if count != lights:
             if count:
                 notes.append(api.extract_lights(scene, count=count).report())
@@ -269,7 +281,8 @@ def transfer_rows(scene, roles, reference, masks, folder, hdri):
         materials.remove_from_materials(mats)
         rows.append(_row(name, image, reference, masks, seconds))
         print(f"{hdri}: {name}: {rows[-1]}", flush=True)
-    notes.append(_warm_eevee_times(scene, objects, folder, hdri, lights))
+    if only is None:
+        notes.append(_warm_eevee_times(scene, objects, folder, hdri, lights))
     api.compute_from_world(scene)
     for note in notes:
         print(f"NOTE {hdri}: {note}", flush=True)
@@ -335,18 +348,52 @@ def write(report, text):
     report.write_text(new)
 
 
+def merge(report, results):
+    """Put the rows of ``results`` ({hdri: rows}) in place of the rows of the same method in
+    the tables of REPORT.md's section (under "**{hdri}.exr**"), appending a row the table
+    lacks; every other line of the section is kept (a partial run, ``--only``)."""
+    lines = report.read_text().split("\n")
+    begin, end = lines.index(BEGIN), lines.index(END)
+    for hdri, rows in results.items():
+        head = next(i for i in range(begin, end) if lines[i].startswith(f"**{hdri}.exr**"))
+        first = next(i for i in range(head, end) if lines[i].startswith("| method |")) + 2
+        last = next(i for i in range(first, end) if not lines[i].startswith("|"))
+        for r in rows:
+            text = (f"| {r['method']} | {r['diffuse']:.1%} | {r['glossy']:.1%} | "
+                    f"{r['shadowed']:.1%} | {r['bright']:.3f} | {r['seconds']:.1f} s |")
+            match = [i for i in range(first, last) if lines[i].startswith(f"| {r['method']} |")]
+            if match:
+                lines[match[0]] = text
+            else:
+                lines.insert(last, text)
+                last, end = last + 1, end + 1
+    report.write_text("\n".join(lines))
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=64)
     parser.add_argument("--out", type=Path, default=HERE / "REPORT.md")
+    parser.add_argument("--hdri", action="append", choices=HDRIS,
+                        help="only this HDRI (repeatable; default: all)")
+    parser.add_argument("--only", action="append", metavar="SUBSTRING",
+                        help="only the methods whose name contains SUBSTRING (repeatable); "
+                             "their rows replace those of the same name in the report, the "
+                             "rest of the section is kept")
     args = parser.parse_args(argv)
     start = time.perf_counter()
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
     with tempfile.TemporaryDirectory() as folder:
         results, notes = {}, {}
-        for hdri in HDRIS:
-            results[hdri], notes[hdri] = measure(hdri, args.size, folder)
-    write(args.out, section(results, args.size, load, time.perf_counter() - start, notes))
+        for hdri in args.hdri or HDRIS:
+            results[hdri], notes[hdri] = measure(hdri, args.size, folder, args.only)
+    load_end = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    print(f"load average {load} at the start, {load_end} at the end; "
+          f"{time.perf_counter() - start:.0f} s", flush=True)
+    if args.only or args.hdri:
+        merge(args.out, results)
+    else:
+        write(args.out, section(results, args.size, load, time.perf_counter() - start, notes))
     print(f"wrote the real-scene section of {args.out}")
 
 

@@ -14,7 +14,8 @@ reflections away. They are added back to each material as an emission seen by EE
 
       coverage · P(r, R) · (F0 · A(r, n·v) + B(r, n·v)),
 
-  R the view reflected about its Normal, P the maps looked up at R by Environment Texture
+  R the view reflected about its Normal, P the maps looked up at R (leaned toward the
+  normal by its roughness: ``core.glossy.dominant_factor``) by Environment Texture
   nodes and interpolated linearly in its Roughness r, A and B the split sum's terms read from
   a 16 × 16 table image (``core.glossy.environment_brdf_table``, packed once per file), with
   the multiple-scattering term added (``core.glossy``), F0 = (1 − Metallic) F0_IOR +
@@ -91,6 +92,9 @@ def write_maps(scene, radiance=None):
         elif tuple(image.size) != (width, height):
             image.scale(width, height)
         image.colorspace_settings.name = compat.working_space()  # that of the pixels
+        # EEVEE uploads float images as half floats by default: 65504 at most, a sun's
+        # texel in the r = 0 map can be brighter (sunrise.exr's: 8.6e3)
+        image.use_half_precision = False
         rgba = np.ones((height, width, 4), dtype=np.float32)
         rgba[..., :3] = level[::-1]  # Image.pixels are bottom row first
         image.pixels.foreach_set(rgba.ravel())
@@ -191,6 +195,18 @@ def _specular(b, table, roughness, n_dot_v, f0):
     return _vector(b, "ADD", single, gain)
 
 
+def _dominant(b, reflected, normal, roughness):
+    """The lookup direction N + t (R − N), t = s (√s + r²), s = 1 − r²
+    (``core.glossy.dominant_factor``)."""
+    alpha = b.math("MULTIPLY", roughness, roughness, label=LABEL)
+    smooth = b.math("SUBTRACT", 1.0, alpha, label=LABEL)
+    factor = b.math("MULTIPLY", smooth,
+                    b.math("ADD", b.math("SQRT", smooth, label=LABEL), alpha, label=LABEL),
+                    label=LABEL)
+    lean = _vector(b, "SCALE", _vector(b, "SUBTRACT", reflected, normal), factor)
+    return _vector(b, "ADD", normal, lean)
+
+
 def _leaf_reflection(b, leaf, images, table, geometry):
     """The colour socket of one Principled leaf's glossy reflection (module docstring)."""
     bsdf = leaf.node
@@ -200,6 +216,7 @@ def _leaf_reflection(b, leaf, images, table, geometry):
     reflected = _vector(b, "SCALE", _vector(b, "REFLECT", incoming, normal), -1.0)
     roughness = b.math("MAXIMUM", ("follow", bsdf.inputs["Roughness"]), 0.0, label=LABEL,
                        clamp=True)
+    reflected = _dominant(b, reflected, normal, roughness)
     n_dot_v = b.math("MAXIMUM", _vector(b, "DOT_PRODUCT", normal, incoming), 1e-4, label=LABEL,
                      clamp=True)
     metallic = bsdf.inputs["Metallic"]
