@@ -124,11 +124,11 @@ def column_sums(pixels, max_order=2, zero_nonfinite=False):
     weights = _stacked_column_weights(width, max_order)
     sums = np.empty((height, weights.shape[0], 3))
     threads = thread_count(height) if height * width >= THREADED_TEXELS else 1
-    bands = np.linspace(0, height, threads + 1).astype(int)
-    work = [(pixels, weights, sums, r0, r1, zero_nonfinite) for r0, r1 in zip(bands, bands[1:])]
-    if len(work) == 1:
-        _band_column_sums(*work[0])
+    if threads == 1:  # a small map: no thread, no bands (their set-up was a tenth of 256x128)
+        _band_column_sums(pixels, weights, sums, 0, height, zero_nonfinite)
     else:
+        bands = [height * k // threads for k in range(threads + 1)]
+        work = [(pixels, weights, sums, r0, r1, zero_nonfinite) for r0, r1 in zip(bands, bands[1:])]
         pool = thread_pool(len(work))
         for done in [pool.submit(_quiet_band_column_sums, *w) for w in work]:
             done.result()
@@ -223,15 +223,27 @@ def project_texels(values, rows, columns, height, width, max_order=2):
     """
     v = np.asarray(values, dtype=np.float64).reshape(-1, 3)
     rows, columns = np.asarray(rows, dtype=np.intp), np.asarray(columns, dtype=np.intp)
-    row_w = row_weights(height, max_order)[rows]  # (N, θ functions)
-    column_w = _stacked_column_weights(width, max_order)[:, columns]  # (φ functions, N)
+    theta, phi = _function_pairs(max_order)
+    row_w = row_weights(height, max_order)[rows][:, theta].T  # (coefficients, N)
+    column_w = _stacked_column_weights(width, max_order)[phi][:, columns]  # (coefficients, N)
+    return (row_w * column_w) @ v
+
+
+@lru_cache(maxsize=4)
+def _function_pairs(max_order):
+    """(θ function, φ function) index arrays, one pair per coefficient in ``sh_index`` order:
+    Y_lm's θ part is (l, |m|), its φ part cos mφ for m >= 0 and sin |m|φ for m < 0."""
+    theta_index = {pair: t for t, pair in enumerate(_theta_functions(max_order))}
     phi_index = {pair: k for k, pair in enumerate(_phi_functions(max_order))}
-    coeffs = np.zeros((num_coefficients(max_order), 3))
-    for t, (l, m) in enumerate(_theta_functions(max_order)):
-        coeffs[sh_index(l, m)] = (row_w[:, t] * column_w[phi_index[m, 0]]) @ v
-        if m > 0:
-            coeffs[sh_index(l, -m)] = (row_w[:, t] * column_w[phi_index[m, 1]]) @ v
-    return coeffs
+    theta = np.empty(num_coefficients(max_order), dtype=np.intp)
+    phi = np.empty_like(theta)
+    for l in range(max_order + 1):
+        for m in range(-l, l + 1):
+            theta[sh_index(l, m)] = theta_index[l, abs(m)]
+            phi[sh_index(l, m)] = phi_index[abs(m), int(m < 0)]
+    theta.setflags(write=False)
+    phi.setflags(write=False)
+    return theta, phi
 
 
 def _combine(a, weights, max_order, nonfinite):
@@ -245,12 +257,10 @@ def _combine(a, weights, max_order, nonfinite):
             )
         if count:  # else every texel is finite and the sums overflowed: reported below
             sums = column_sums(a, max_order, zero_nonfinite=True)
-    phi_index = {pair: k for k, pair in enumerate(_phi_functions(max_order))}
-    coeffs = np.zeros((num_coefficients(max_order), 3))
-    for t, (l, m) in enumerate(_theta_functions(max_order)):
-        coeffs[sh_index(l, m)] = weights[:, t] @ sums[:, phi_index[m, 0]]
-        if m > 0:
-            coeffs[sh_index(l, -m)] = weights[:, t] @ sums[:, phi_index[m, 1]]
+    theta, phi = _function_pairs(max_order)
+    # Σ_i w_t[i] S[i, k, c] for every (θ, φ) function pair in one product, then the pairs
+    # that are coefficients (eq. 10 separated: L_lm = Σ_i w_l|m|[i] Σ_j ∫φ_m(column j) L_ij).
+    coeffs = np.tensordot(weights, sums, axes=(0, 0))[theta, phi]
     if not (np.isfinite(sums).all() and np.isfinite(coeffs).all()):
         raise ValueError(
             "the image's values are too large: its integrals overflow float64 "
