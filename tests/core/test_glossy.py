@@ -66,9 +66,10 @@ def test_level_maps_match_a_quadrature_of_the_rotated_world():
     assert mean == pytest.approx(truth, rel=2e-3)
 
 
-def split_sum(roughness, n_dot_v, steps=600):
-    """(A, B) integrated numerically: ∫ D G /(4 n·v) (1 − F_c or F_c) over the light
-    hemisphere, F_c = (1 − v·h)⁵, GGX α = r², separable Smith G (midpoint rule)."""
+def ggx_hemisphere(roughness, n_dot_v, steps):
+    """The midpoint grid over the light hemisphere (normal z, view in the xz plane): light
+    directions (steps, 2·steps, 3), the view v, v·h, θ, and the single-scattering GGX D G / (4 n·v)
+    (α = r², separable Smith G) at each."""
     alpha2 = roughness ** 4
     v = np.array([np.sqrt(1 - n_dot_v ** 2), 0.0, n_dot_v])
     theta = (np.arange(steps) + 0.5) * (pi / 2 / steps)
@@ -83,7 +84,14 @@ def split_sum(roughness, n_dot_v, steps=600):
     def g1(c):
         return 2 * c / (c + np.sqrt(alpha2 + (1 - alpha2) * c * c))
 
-    f = d * g1(nl) * g1(n_dot_v) / (4 * n_dot_v)  # times n·l dω = n·l sin θ dθ dφ
+    return light, v, vh, t, d * g1(nl) * g1(n_dot_v) / (4 * n_dot_v)
+
+
+def split_sum(roughness, n_dot_v, steps=600):
+    """(A, B) integrated numerically: ∫ D G /(4 n·v) (1 − F_c or F_c) over the light
+    hemisphere, F_c = (1 − v·h)⁵, GGX α = r², separable Smith G (midpoint rule)."""
+    light, v, vh, t, f = ggx_hemisphere(roughness, n_dot_v, steps)
+    # f times n·l dω = n·l sin θ dθ dφ
     measure = np.sin(t) * (pi / 2 / steps) * (2 * pi / (2 * steps))
     fresnel = (1 - np.clip(vh, 0, 1)) ** 5
     return float((f * (1 - fresnel) * measure).sum()), float((f * fresnel * measure).sum())
@@ -111,22 +119,9 @@ def lobe_mean_direction(roughness, n_dot_v, steps=600):
     """The mean light direction of the single-scattering GGX lobe f n·l (with Schlick's
     Fresnel at F0 = 0.8, the bench's metal) over the hemisphere (midpoint rule; normal z,
     view in the xz plane), normalized."""
-    alpha2 = roughness ** 4
-    v = np.array([np.sqrt(1 - n_dot_v ** 2), 0.0, n_dot_v])
-    theta = (np.arange(steps) + 0.5) * (pi / 2 / steps)
-    phi = (np.arange(2 * steps) + 0.5) * (2 * pi / (2 * steps))
-    t, p = np.meshgrid(theta, phi, indexing="ij")
-    light = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
-    half = light + v
-    half /= np.linalg.norm(half, axis=-1, keepdims=True)
-    nh, vh, nl = half[..., 2], half @ v, light[..., 2]
-    d = alpha2 / (pi * (nh * nh * (alpha2 - 1) + 1) ** 2)
-
-    def g1(c):
-        return 2 * c / (c + np.sqrt(alpha2 + (1 - alpha2) * c * c))
-
+    light, v, vh, t, f = ggx_hemisphere(roughness, n_dot_v, steps)
     fresnel = 0.8 + 0.2 * (1 - np.clip(vh, 0, 1)) ** 5
-    weight = d * g1(nl) * g1(n_dot_v) * fresnel * np.sin(t) / (4 * n_dot_v)  # f n·l dω
+    weight = f * fresnel * np.sin(t)  # f n·l dω
     mean = (weight[..., None] * light).sum(axis=(0, 1))
     return mean / np.linalg.norm(mean), v
 
