@@ -84,13 +84,14 @@ def _downsample_band(pixels, k, out, shares, i0, i1):
     widest = np.where((edges[:-1] <= 0.5 * pi) & (edges[1:] >= 0.5 * pi), 1.0, widest)
     diameter = np.minimum(pi, pi / out_h + widest * min(2.0 * pi * k / width, pi))
     # blocks of columns small enough for the core's cache: CACHE_VALUES floats of k rows.
-    # In-place arithmetic rather than matrix products where that measured faster (2 loaded
-    # cores: the product of a k-vector by k rows was 3x slower for k = 2, 2x faster for 16).
+    # In-place arithmetic, and einsum rather than matrix products: a k-vector times k rows is
+    # a matrix-vector product, which OpenBLAS shares out between its own threads from about
+    # 9K values, competing with this band's threads for the cores (8192x4096 by 16 with its
+    # bound: 0.15-0.40 s with np.matmul, 0.10-0.13 s with einsum, benchmarks/REPORT.md).
     step = max(1, CACHE_VALUES // (k * k * channels)) * k * channels
     dtype = np.result_type(pixels.dtype, np.float32)
     acc, tmp = (np.empty(min(step, width * channels), dtype=dtype) for _ in range(2))
     dev = np.empty((k, min(step, width * channels)), dtype=dtype) if shares is not None else None
-    ones = np.ones(min(step, width * channels) // channels)
     for i in range(i0, i1):
         r0 = i * k
         w = solid[r0 : r0 + k].astype(dtype)
@@ -101,8 +102,8 @@ def _downsample_band(pixels, k, out, shares, i0, i1):
             n = flat.shape[1]
             blocks, b0 = n // (k * channels), c0 // (k * channels)
             a, t = acc[:n], tmp[:n]
-            if k >= 8:  # measured: a product is faster for tall blocks, the loop for short
-                np.matmul(w, flat, out=a)
+            if k >= 8:  # measured: a sum of products is faster for tall blocks, the loop
+                np.einsum("i,ij->j", w, flat, out=a)  # for short (einsum: no BLAS, below)
             else:
                 np.multiply(flat[0], w[0], out=a)
                 for r in range(1, k):
@@ -120,8 +121,7 @@ def _downsample_band(pixels, k, out, shares, i0, i1):
                 spread = dev[:, :n]
                 np.subtract(flat, repeated, out=spread)
                 np.abs(spread, out=spread)
-                # per channel in float64 by one product (a strided float64 sum of the
-                # (n / channels, channels) view was a quarter of the whole pass)
-                total = ones[: n // channels] @ (w @ spread).astype(np.float64).reshape(
-                    -1, channels)
+                # Ω-weighted over the k rows (float32), then per channel in float64
+                total = np.einsum("i,ij->j", w, spread).astype(np.float64).reshape(
+                    -1, channels).sum(axis=0)
                 shares[i] += diameter[i] * total[:3]
