@@ -12,14 +12,15 @@ reflections away. They are added back to each material as an emission seen by EE
   own output, unchanged) whose Surface is what the material renders (BSDF + SH diffuse) plus
   an Emission of, for each Principled BSDF of the surface,
 
-      coverage · P(r, R) · (F0 · A(r, n·v) + B(r, n·v)),
+      coverage · P(r_eff, N + t (R − N)) · (F0 · A(r, n·v) + B(r, n·v)),
 
-  R the view reflected about its Normal, P the maps looked up at R (leaned toward the
-  normal by its roughness: ``core.glossy.dominant_factor``) by Environment Texture
-  nodes and interpolated linearly in its Roughness r, A and B the split sum's terms read from
-  a 16 × 16 table image (``core.glossy.environment_brdf_table``, packed once per file), with
-  the multiple-scattering term added (``core.glossy``), F0 = (1 − Metallic) F0_IOR +
-  Metallic · Base Color, coverage its Mix factors and Alpha. Every input is followed
+  R the view reflected about its Normal, P the maps looked up by Environment Texture nodes
+  and interpolated linearly in roughness, A and B the split sum's terms, t (toward the GGX
+  lobe's mean direction: ``core.glossy.lobe_factor``) and r_eff (the roughness of a
+  prefilter as spread as the lobe: ``core.glossy.effective_roughness``) read at its
+  Roughness r and n·v from a 16 × 16 table image (``core.glossy.environment_brdf_table``,
+  packed once per file), with the multiple-scattering term added (``core.glossy``),
+  F0 = (1 − Metallic) F0_IOR + Metallic · Base Color, coverage its Mix factors and Alpha. Every input is followed
   (``keep_bsdf.Builder``). Remove deletes these nodes and, once no material keeps its BSDF,
   every image made here (``remove_maps``).
   Other shaders that reflect (Glossy, Glass, Anisotropic, ... BSDFs) and the Coat and Sheen
@@ -48,6 +49,9 @@ UNMODELLED_SHADERS = frozenset({
 })
 # Principled layers whose reflections are not modelled, when their weight is not 0.
 UNMODELLED_LAYERS = ("Coat Weight", "Sheen Weight")
+# The split-sum table image's marker: version 2 holds t and r_eff too, twice as wide
+# (``table_image``; version 1, no "version": A and B only).
+TABLE_RECORD = {"table": "split sum", "version": 2}
 
 
 def _record(image):
@@ -173,19 +177,50 @@ def _lookup(b, images, reflected, roughness):
     return result
 
 
-def _specular(b, table, roughness, n_dot_v, f0):
+def _table(b, table, roughness, n_dot_v):
+    """The split sum's table (``table_image``) looked up at (n·v, r): sockets (A, B, t,
+    r_eff), interpolated bilinearly between its texel centres. Through Environment Texture
+    nodes at the directions whose equirectangular (u, v) are (n·v / 2, r) for (A, B, t) and
+    (½ + n·v / 2, r) for r_eff (``core.equirect.uv_to_direction``: φ = π − 2π u,
+    θ = π (1 − v)), n·v and r clamped to the outer texel centres (no blend across the
+    image's edges and halves): EEVEE reads an Image Texture node of Linear interpolation
+    through mipmaps picked by the screen derivatives of (n·v, r), which over a small
+    sphere's few pixels average the table over a quarter of its width and more; its
+    Environment Texture takes no mipmaps (benchmarks/bench_real_scene, sunrise.exr's glossy
+    sphere, EEVEE: 36.3 % through an Image Texture, 35.2 % at the nearest texel of a 64 × 64
+    table, 34.7 % so; the same nodes in Cycles 34.5 %, 35.0 %, 34.5 %)."""
+    size = table.size[1]
+    low, high = 0.5 / size, 1.0 - 0.5 / size
+    u = b.math("MINIMUM", b.math("MAXIMUM", n_dot_v, low, label=LABEL), high, label=LABEL)
+    v = b.math("MINIMUM", b.math("MAXIMUM", roughness, low, label=LABEL), high, label=LABEL)
+    theta = b.math("MULTIPLY_ADD", v, -np.pi, np.pi, label=LABEL)
+    sin_theta = b.math("SINE", theta, label=LABEL)
+    cos_theta = b.math("COSINE", theta, label=LABEL)
+    colours = []
+    for half in (0.0, 0.5):
+        phi = b.math("MULTIPLY_ADD", u, -np.pi, np.pi - 2.0 * np.pi * half, label=LABEL)
+        where = b.node("ShaderNodeCombineXYZ", f"{LABEL} (n·v, roughness) as a direction")
+        b.tree.links.new(b.math("MULTIPLY", sin_theta, b.math("COSINE", phi, label=LABEL),
+                                label=LABEL), where.inputs["X"])
+        b.tree.links.new(b.math("MULTIPLY", sin_theta, b.math("SINE", phi, label=LABEL),
+                                label=LABEL), where.inputs["Y"])
+        b.tree.links.new(cos_theta, where.inputs["Z"])
+        lookup = b.node("ShaderNodeTexEnvironment",
+                        f"{LABEL}: split sum {'(A, B, t)' if half == 0.0 else 'r_eff'}",
+                        image=table, interpolation="Linear", projection="EQUIRECTANGULAR")
+        b.tree.links.new(where.outputs[0], lookup.inputs["Vector"])
+        colours.append(lookup.outputs["Color"])
+    parts = b.node("ShaderNodeSeparateXYZ", f"{LABEL} (A, B, t)")
+    b.tree.links.new(colours[0], parts.inputs[0])
+    effective = b.node("ShaderNodeSeparateXYZ", f"{LABEL} (r_eff)")
+    b.tree.links.new(colours[1], effective.inputs[0])
+    return (*parts.outputs, effective.outputs["X"])
+
+
+def _specular(b, scale, bias, f0):
     """The colour socket of the split sum's reflectance with the multiple-scattering term
-    (``core.glossy``): (A, B) read from ``table`` at (n·v, r), then
+    (``core.glossy``) from the table's ``scale`` A and ``bias`` B:
     F0 A + B + (F0 A + B) F_avg (1 − E) / (1 − F_avg (1 − E))."""
-    where = b.node("ShaderNodeCombineXYZ", f"{LABEL} (n·v, roughness)")
-    b.tree.links.new(n_dot_v, where.inputs["X"])
-    b.tree.links.new(roughness, where.inputs["Y"])
-    lookup = b.node("ShaderNodeTexImage", f"{LABEL}: split sum (A, B)", image=table,
-                    interpolation="Linear", extension="EXTEND")
-    b.tree.links.new(where.outputs[0], lookup.inputs["Vector"])
-    parts = b.node("ShaderNodeSeparateXYZ", f"{LABEL} (A, B)")
-    b.tree.links.new(lookup.outputs["Color"], parts.inputs[0])
-    scale, bias = parts.outputs["X"], parts.outputs["Y"]
     single = _vector(b, "MULTIPLY_ADD", f0, scale, bias)  # F0 A + B
     missing = b.math("SUBTRACT", 1.0, b.math("ADD", scale, bias, label=LABEL), label=LABEL)
     average = _vector(b, "MULTIPLY_ADD", f0, 20.0 / 21.0, 1.0 / 21.0)  # F0 + (1 − F0)/21
@@ -195,14 +230,9 @@ def _specular(b, table, roughness, n_dot_v, f0):
     return _vector(b, "ADD", single, gain)
 
 
-def _dominant(b, reflected, normal, roughness):
-    """The lookup direction N + t (R − N), t = s (√s + r²), s = 1 − r²
-    (``core.glossy.dominant_factor``)."""
-    alpha = b.math("MULTIPLY", roughness, roughness, label=LABEL)
-    smooth = b.math("SUBTRACT", 1.0, alpha, label=LABEL)
-    factor = b.math("MULTIPLY", smooth,
-                    b.math("ADD", b.math("SQRT", smooth, label=LABEL), alpha, label=LABEL),
-                    label=LABEL)
+def _dominant(b, reflected, normal, factor):
+    """The lookup direction N + t (R − N), t = ``factor`` read from the table
+    (``core.glossy.lobe_factor``: toward the GGX lobe's mean direction)."""
     lean = _vector(b, "SCALE", _vector(b, "SUBTRACT", reflected, normal), factor)
     return _vector(b, "ADD", normal, lean)
 
@@ -216,9 +246,10 @@ def _leaf_reflection(b, leaf, images, table, geometry):
     reflected = _vector(b, "SCALE", _vector(b, "REFLECT", incoming, normal), -1.0)
     roughness = b.math("MAXIMUM", ("follow", bsdf.inputs["Roughness"]), 0.0, label=LABEL,
                        clamp=True)
-    reflected = _dominant(b, reflected, normal, roughness)
     n_dot_v = b.math("MAXIMUM", _vector(b, "DOT_PRODUCT", normal, incoming), 1e-4, label=LABEL,
                      clamp=True)
+    scale, bias, factor, effective = _table(b, table, roughness, n_dot_v)
+    reflected = _dominant(b, reflected, normal, factor)
     metallic = bsdf.inputs["Metallic"]
     f0 = dielectric_f0(b, bsdf, label=LABEL)
     base = b.node("ShaderNodeVectorMath", f"{LABEL} (metal F0)", operation="SCALE")
@@ -226,12 +257,11 @@ def _leaf_reflection(b, leaf, images, table, geometry):
     b.follow(base.inputs["Scale"], metallic)
     dielectric = b.math("MULTIPLY", f0 if f0 is not None else 0.04,
                         b.math("SUBTRACT", 1.0, ("follow", metallic), label=LABEL), label=LABEL)
-    specular = _specular(b, table, roughness, n_dot_v,
-                         _vector(b, "ADD", base.outputs["Vector"], dielectric))
+    specular = _specular(b, scale, bias, _vector(b, "ADD", base.outputs["Vector"], dielectric))
     weight = product(b, coverage_factors(b, leaf), label=LABEL)
     if not isinstance(weight, float):
         specular = _vector(b, "MULTIPLY", specular, weight)
-    return _vector(b, "MULTIPLY", _lookup(b, images, reflected, roughness), specular)
+    return _vector(b, "MULTIPLY", _lookup(b, images, reflected, effective), specular)
 
 
 def maps_for(scene):
@@ -248,19 +278,24 @@ def maps_for(scene):
 
 
 def table_image():
-    """The file's image of ``core.glossy.environment_brdf_table`` (A in red, B in green),
-    made and packed when missing."""
+    """The file's image of ``core.glossy.environment_brdf_table``: (A, B, t) in the left
+    half, r_eff in the right half's red (``_table``), made and packed when missing. One of
+    an older table (A and B only, read by the nodes of an older Apply) is left to those
+    nodes; Remove deletes both."""
     for image in bpy.data.images:
-        if image.library is None and (_record(image) or {}).get("table") == "split sum":
+        if image.library is None and _record(image) == TABLE_RECORD:
             return image
     table = environment_brdf_table()
     size = table.shape[0]
-    image = bpy.data.images.new(f"{LABEL} split sum", size, size, alpha=False,
+    image = bpy.data.images.new(f"{LABEL} split sum", 2 * size, size, alpha=False,
                                 float_buffer=True)
     image.colorspace_settings.name = "Non-Color"
-    image[IMAGE_MARKER] = json.dumps({"table": "split sum"})
-    rgba = np.ones((size, size, 4), dtype=np.float32)
-    rgba[..., :2] = table  # row 0 (r near 0) is Image.pixels' first, bottom row: v = r
+    image.use_half_precision = False
+    image[IMAGE_MARKER] = json.dumps(TABLE_RECORD)
+    rgba = np.ones((size, 2 * size, 4), dtype=np.float32)
+    rgba[:, :size, :3] = table[..., :3]
+    rgba[:, size:, :3] = table[..., 3:]
+    # row 0 (r near 0) is Image.pixels' first, bottom row: v = r
     image.pixels.foreach_set(rgba.ravel())
     image.pack()
     return image
