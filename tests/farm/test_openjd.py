@@ -220,9 +220,12 @@ def test_render_output_name_cannot_leave_the_output_folder(tmp_path, blender_com
 
 
 def test_render_rerun_after_a_killed_task_completes_the_job(tmp_path, blender_command):
+    # The kill comes once the second frame is written: the first task is 20 frames long so
+    # that a poll delayed by a loaded machine still lands in it (with 10, a run at load 4
+    # saw all 10 written before the kill).
     job, blend, preset = render_job(tmp_path, blender_command)
     params = job.params(BlendFile=str(blend), PresetFile=str(preset),
-                        OutputFolder=str(job.out), Frames="1-20", FramesPerTask=10,
+                        OutputFolder=str(job.out), Frames="1-40", FramesPerTask=20,
                         ApplyMode="EMISSION")
     process = subprocess.Popen(job.command(params), env=job.env(),
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -235,7 +238,7 @@ def test_render_rerun_after_a_killed_task_completes_the_job(tmp_path, blender_co
         kill_tree(process.pid)  # openjd and the task's Blender (its own process group): a dead
         process.wait()  # worker
     done = sorted(p.name for p in job.out.iterdir() if not p.name.startswith("."))
-    assert frame_names(1, 2) == done[:2] and len(done) < 10, done  # killed in the first task
+    assert frame_names(1, 2) == done[:2] and len(done) < 20, done  # killed in the first task
     for name in done:
         check_frame(job.out / name)  # what is there is whole
     stamps = {name: (job.out / name).stat().st_mtime_ns for name in done}
@@ -243,14 +246,14 @@ def test_render_rerun_after_a_killed_task_completes_the_job(tmp_path, blender_co
     status, blocks = job.run(params)
     assert status == 0, blocks
     run = tasks(blocks)
-    assert list(run) == ["1-10", "11-20"]
-    skipped = [line for line in run["1-10"]["lines"] if ": skipped (" in line]
+    assert list(run) == ["1-20", "21-40"]
+    skipped = [line for line in run["1-20"]["lines"] if ": skipped (" in line]
     assert len(skipped) == len(done)
     assert sorted(p.name for p in job.out.iterdir() if not p.name.startswith(".")) == (
-        frame_names(1, 20))
-    for name in frame_names(1, 20):
+        frame_names(1, 40))
+    for name in frame_names(1, 40):
         check_frame(job.out / name)
     assert {name: (job.out / name).stat().st_mtime_ns for name in done} == stamps
     # The frame being written when the kill came was a hidden temporary file, never a frame;
     # its task, run again, removed it.
-    assert sorted(job.out.iterdir()) == sorted(job.out / name for name in frame_names(1, 20))
+    assert sorted(job.out.iterdir()) == sorted(job.out / name for name in frame_names(1, 40))
