@@ -18,8 +18,9 @@ The prefilter's lobe is centred on R and as wide as the BRDF's at normal view wi
 n·l; the BRDF's lobe f n·l leans toward the normal and widens the rougher the surface and
 the more grazing the view. So the table also holds, for each (r, n·v), where and at which
 roughness the maps are looked up: toward the lobe's mean direction (``lobe_factor``, in
-place of R; ``dominant_factor`` is the view-independent fit of it by Lagarde and de
-Rousiers) and at the roughness whose prefilter kernel is as spread as the lobe
+place of R; Lagarde and de Rousiers' "specular dominant direction" of "Moving Frostbite to
+Physically Based Rendering", 2014, a fit by the roughness alone, was up to 22° off it at
+grazing view, tests/core) and at the roughness whose prefilter kernel is as spread as the lobe
 (``effective_roughness``).
 Cycles' Principled BSDF renders multiple-scattering GGX, which gives back the energy single
 scattering loses: the shader adds it as Fdez-Agüera ("A Multiple-Scattering Microfacet Model
@@ -59,23 +60,6 @@ SOURCE_WIDTH = 1024
 TABLE_SIZE = 16
 TABLE_STEPS = 64
 TAIL_POWER = 3
-
-
-def dominant_factor(roughness):
-    """t of the direction N + t (R − N) (unnormalized) toward the GGX lobe's dominant
-    direction at perceptual ``roughness`` r (scalar or array), α = r², whatever the view:
-    t = s (√s + α), s = 1 − α, the fit of Lagarde and de Rousiers ("Moving Frostbite to
-    Physically Based Rendering", SIGGRAPH 2014 course notes, "specular dominant direction").
-    The lobe f n·l of a rough surface leans from R toward the normal (its n·l factor and the
-    shadowing at grazing angles), so the mirror direction R places the highlight too far
-    toward the rim: t = 1 at r = 0 (R), 0 at r = 1 (N). The shader looked the maps up there
-    before the table's ``lobe_factor``, which follows the view too (up to 22° nearer the
-    lobe's mean at grazing view, tests/core); measured in benchmarks/bench_real_scene's scene
-    (sunrise.exr, the sphere of roughness 0.5, the nodes rendered by Cycles): 22.8 % → 20.4 %
-    from path tracing of the world's reflections; with α in place of r², 62 %."""
-    alpha = np.asarray(roughness, dtype=np.float64) ** 2
-    smooth = 1.0 - alpha
-    return smooth * (np.sqrt(smooth) + alpha)
 
 
 def _smith_g1(alpha2, cos):
@@ -172,8 +156,8 @@ def lobe_factor(roughness, n_dot_v, steps=TABLE_STEPS):
     direction R, at θ_R = acos(n·v) and the mean at θ_m from N,
     tan θ_m = t sin θ_R / (1 − t (1 − cos θ_R)), so t = tan θ_m / (sin θ_R + tan θ_m
     (1 − cos θ_R)): 1 for a mirror (θ_m = θ_R), 0 for a lobe centred on the normal. What the
-    split sum's table holds for the lookup direction: ``dominant_factor``'s fit (Lagarde and
-    de Rousiers) depends on the roughness only, this on the view as well."""
+    split sum's table holds for the lookup direction: it depends on the view as well as the
+    roughness (Lagarde and de Rousiers' fit, on the roughness alone, is up to 22° off it)."""
     means = _lobe_means(roughness, [n_dot_v], steps, TAIL_POWER)
     return float(_lobe_factors(means, [n_dot_v])[0])
 

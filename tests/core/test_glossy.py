@@ -10,7 +10,6 @@ from sh_lighting.core.equirect import texel_directions
 from sh_lighting.core.glossy import (
     LEVEL_WIDTHS,
     ROUGHNESS_LEVELS,
-    dominant_factor,
     effective_roughness,
     environment_brdf,
     environment_brdf_table,
@@ -129,6 +128,15 @@ def lobe_mean_direction(roughness, n_dot_v, f0=None, steps=600):
     fresnel = 1.0 if f0 is None else f0 + (1 - f0) * (1 - np.clip(vh, 0, 1)) ** 5
     weight = f * fresnel * np.sin(t)  # f n·l dω
     return (weight[..., None] * light).sum(axis=(0, 1)) / weight.sum(), v
+
+
+def dominant_factor(roughness):
+    """Lagarde and de Rousiers' view-independent fit of the lookup direction ("Moving
+    Frostbite to Physically Based Rendering", 2014, "specular dominant direction"):
+    t = s (√s + α), s = 1 − α, α = r², which the shader used before the table's t; here only
+    the comparison the table's t is measured against."""
+    alpha = roughness ** 2
+    return (1.0 - alpha) * (np.sqrt(1.0 - alpha) + alpha)
 
 
 def _degrees(a, b):
