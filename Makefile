@@ -34,10 +34,10 @@ test: $(STAMP)
 	$(PY) -m pytest $(XDIST)
 
 # The tests whose outcome depends on the Blender version, on Blender 4.2 LTS (the oldest the
-# manifest promises): tests/blender and tests/farm. tests/core and tests/interop need numpy
+# manifest promises): tests/blender, tests/cli and tests/farm. tests/core and tests/interop need numpy
 # only, the same numpy 1.26.4 in both environments, so `make test` has run them already.
 test-lts: $(LTS_STAMP)
-	$(LTS_VENV)/bin/python -m pytest $(XDIST) tests/blender tests/farm
+	$(LTS_VENV)/bin/python -m pytest $(XDIST) tests/blender tests/cli tests/farm
 
 # The add-on in a real Blender window, driven by clicks and key presses (tests/gui). By
 # default Debian's Blender in the root tools/blender_gui_root.sh builds (needs root; the root

@@ -27,7 +27,7 @@ import bpy
 import numpy as np
 
 from sh_lighting import api
-from sh_lighting.blender import compat
+from sh_lighting.blender.data import compat
 from sh_lighting.blender.design import lights
 from sh_lighting.blender.shading import materials
 from sh_lighting.core import project_equirect

@@ -31,7 +31,7 @@ from tempfile import TemporaryDirectory
 import bpy
 import numpy as np
 
-from sh_lighting.blender.photo import camera_of, chrome_coefficients
+from sh_lighting.blender.photo.fit.fit import camera_of, chrome_coefficients
 from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core.ball_detect import detect_ball
 from sh_lighting.core.downsample import block_downsample
@@ -202,7 +202,7 @@ def section(noise, priors, both, seconds):
     lines = [BEGIN, "## Light from a photograph (Match Photo, issue 25)", "",
              f"Measured by `python -m benchmarks.bench_photo` (load average {load:.1f}; one "
              f"{SIZE} px, {SAMPLES} spp Cycles render took {seconds:.1f} s). Errors: RMS of "
-             "E(n) over normals and channels / its mean. Tests: tests/blender/test_photo.py "
+             "E(n) over normals and channels / its mean. Tests: tests/blender/photo/test_photo.py "
              "and tests/core/test_photo.py assert these within bounds.", "",
              "**Exact nine-term world, EXR, orthographic; added noise σ per pixel** (the "
              f"render has its own 2.4 %; mean of {DRAWS} noise draws). Seen: on the normals "

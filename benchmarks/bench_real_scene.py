@@ -34,7 +34,7 @@ import numpy as np
 from mathutils import Vector
 
 from sh_lighting import api
-from sh_lighting.blender import compat
+from sh_lighting.blender.data import compat
 from sh_lighting.blender.shading import materials
 from sh_lighting.blender.transfer import apply as transfer_apply
 from sh_lighting.blender.transfer import bake

@@ -3,7 +3,7 @@
 `python -m benchmarks.bench_tables`:
 
 * the 9-term irradiance error against brute force of the 8 HDRIs inside bpy, mean and max as
-  fractions of the total light (``tests/blender/test_hdri_error.py`` asserts the universal
+  fractions of the total light (``tests/blender/world/test_hdri_error.py`` asserts the universal
   bounds of docs/reference.md §2; docs/accuracy.md quotes this table);
 * the float32 rounding of each evaluation order of eq. 13 (``tests/core/test_stability.py``
   asserts that the node group's order rounds least on physical lighting).
@@ -27,7 +27,7 @@ from sh_lighting.blender.world.images import load_image_pixels  # noqa: E402
 
 def main():
     print("9-term irradiance error against brute force, 768 normals "
-          "(tests/blender/test_hdri_error.py)")
+          "(tests/blender/world/test_hdri_error.py)")
     folder = bundled_hdri_dir()
     for name in HDRI_NAMES:
         pixels = load_image_pixels(folder / f"{name}.exr")

@@ -11,7 +11,7 @@ each pixel is its centre's ray).
 import bpy
 import numpy as np
 
-from sh_lighting.blender import compat
+from sh_lighting.blender.data import compat
 from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core.equirect import texel_directions
 from sh_lighting.core.sh import sh_basis

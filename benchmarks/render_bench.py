@@ -24,7 +24,7 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-from sh_lighting.blender import compat, scene_data
+from sh_lighting.blender.data import compat, scene_data
 from sh_lighting.blender.shading import materials
 from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core import project_equirect, reference_irradiance
@@ -36,7 +36,7 @@ EEVEE_NATIVE_SAMPLES = 16
 
 def add_camera(scene, location=CAMERA_LOCATION, ortho_scale=ORTHO_SCALE):
     """An orthographic camera at ``location`` looking at the origin, made the scene's camera
-    (also used by tests/blender/test_node_group.py)."""
+    (also used by tests/blender/shading/test_node_group.py)."""
     camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     camera.data.type = "ORTHO"
     camera.data.ortho_scale = ortho_scale

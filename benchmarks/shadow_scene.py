@@ -1,5 +1,5 @@
 """A sphere on a ground plane under an HDRI world (plus lamps): the scene with shadows that
-tests/blender/test_keep_bsdf.py renders for its proofs and bench_lights.py for the report.
+tests/blender/shading/test_keep_bsdf.py renders for its proofs and bench_lights.py for the report.
 
 Unit UV sphere (smooth) standing on a 8 × 8 plane, white materials, an orthographic camera
 looking down at 35°, Cycles CPU with the exact-comparison settings of ``render_bench``
@@ -13,7 +13,7 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-from sh_lighting.blender import compat
+from sh_lighting.blender.data import compat
 from sh_lighting.blender.world.images import load_image_pixels
 
 from .render_bench import _settings, add_camera

@@ -25,9 +25,9 @@ edits (``rotate``, ``match_mapping``, ``exposure``, ``saturation``, ``band_gains
 
 import bpy
 
-from .blender import photo as _photo
-from .blender.photo import SecondPhoto
-from .blender import scene_data as _scene_data
+from .blender.photo import fit as _photo
+from .blender.photo.fit import SecondPhoto
+from .blender.data import scene_data as _scene_data
 from .blender.design.edits import (  # lighting design: exact edits and windows
     DesignError,
     apply_window,
@@ -41,7 +41,7 @@ from .blender.design.edits import (  # lighting design: exact edits and windows
     saturation,
 )
 from .blender.design import lights as _lights
-from .blender.presets.files import (  # presets and interop: JSON, three.js, glTF, Filament
+from .blender.presets.preset_io import (
     FORMATS,
     export_preset,
     import_preset,
@@ -49,14 +49,33 @@ from .blender.presets.files import (  # presets and interop: JSON, three.js, glT
     save_user_preset,
     shipped_presets,
     user_presets,
-)
+)  # presets and interop: JSON, three.js, glTF, Filament
 from .blender.shading import materials as _materials
 from .blender.shading import nodes as _nodes
 from .blender.transfer import apply as _transfer_apply
 from .blender.transfer import bake as _transfer
-from .blender.world import compute as _compute
+from .blender.design import compute as _design_compute
 from .blender.world import reader as _world
 from .formats.presets import PresetError
+
+# What the command line (sh_lighting.cli) uses of the Blender layer, through here only.
+from .blender.data.compat import eevee_engine_id
+from .blender.data.scene_data import has_coefficients, last_note
+from .blender.data.scene_data import validate as validate_coefficients
+from .blender.presets.preset_io import (
+    export_coefficients,
+    read_preset_file,
+    scene_metadata,
+    world_environment,
+)
+from .blender.shading.materials import materials_of, objects_without_material
+from .blender.shading.notes import shared_scene_notes
+from .blender.world.hdri import (
+    ERROR_NORMALS as HDRI_ERROR_NORMALS,
+    hdri_lights,
+    hdri_metadata,
+    read_hdri,
+)
 
 WorldError = _world.WorldError
 AnimatedError = _scene_data.AnimatedError
@@ -73,6 +92,11 @@ __all__ = [
     "DesignError", "rotate", "match_mapping", "exposure", "saturation", "band_gains",
     "flip_vertical", "apply_window", "split_sun", "describe", "negative_warning",
     "extract_lights",
+    # for the command line
+    "eevee_engine_id", "has_coefficients", "last_note", "validate_coefficients",
+    "export_coefficients", "read_preset_file", "scene_metadata", "world_environment",
+    "materials_of", "objects_without_material", "shared_scene_notes", "HDRI_ERROR_NORMALS",
+    "hdri_lights", "hdri_metadata", "read_hdri",
     # precomputed radiance transfer (shadows and bounce light)
     "TransferError", "bake_transfer", "transfer_status", "apply_transfer", "delete_transfer",
     # lighting from a photo of a grey ball
@@ -144,7 +168,7 @@ def compute_from_world(scene, capture_width=None, nonfinite="raise"):
     user-facing message, leaving the scene unchanged, when the world cannot be read.
     """
     # also deletes extracted lights
-    return _compute.compute_and_store(scene, capture_width, nonfinite=nonfinite)[0]
+    return _design_compute.compute_from_world(scene, capture_width, nonfinite=nonfinite)[0]
 
 
 def coefficients_from_photo(scene, path, circle, **options):

@@ -1,7 +1,7 @@
 """Ids shared by the Blender layer and the command line, importable without bpy or numpy
 (the command line's ``--help`` lists them before Blender is loaded).
 
-``blender.presets.files`` and ``blender.shading.materials`` take theirs from here.
+``blender.presets.preset_io`` and ``blender.shading.materials`` take theirs from here.
 """
 
 from typing import NamedTuple
@@ -41,6 +41,15 @@ FILAMENT_FRAMES = {
 }
 # How Apply drives a material (blender.shading.materials); the first is the default
 APPLY_MODES = ("KEEP_BSDF", "EMISSION")
+# (id, name, description) of each Apply mode, for the Mode menus
+APPLY_MODE_ITEMS = (
+    ("KEEP_BSDF", "Keep BSDF",
+     "Keep the material's BSDF (lamps, shadows, reflections); SH replaces the world's diffuse "
+     "light (Cycles)"),
+    ("EMISSION", "Emission Only",
+     "Drive the surface by the SH emission alone: exact and noise free, no lamps or "
+     "reflections"),
+)
 # What lights the unseen side of a grey ball in Match Photo (core.photo.PRIORS); the first
 # is the default
 PHOTO_PRIORS = ("mirror", "ambient", "chrome", "photo", "none")

@@ -14,7 +14,7 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-from sh_lighting.blender import compat
+from sh_lighting.blender.data import compat
 from sh_lighting.core import irradiance
 from sh_lighting.core.equirect import texel_directions
 

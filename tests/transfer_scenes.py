@@ -7,7 +7,7 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-from sh_lighting.blender import compat, scene_data
+from sh_lighting.blender.data import compat, scene_data
 from sh_lighting.blender.transfer import basis
 from sh_lighting.blender.transfer import nodes as transfer_nodes
 from sh_lighting.core.sh import sh_basis, spread_normals

@@ -29,7 +29,7 @@ def blender_ext_command():
 def stage(destination):
     """Copy the package, manifest, licence and shipped presets into the new folder
     ``destination``; the presets go to ``presets/`` inside the package, where
-    ``sh_lighting.blender.presets.files.shipped_preset_dir`` looks once installed.
+    ``sh_lighting.blender.presets.preset_io.shipped_preset_dir`` looks once installed.
     """
     shutil.copytree(
         ROOT / "sh_lighting", destination, ignore=shutil.ignore_patterns("__pycache__", "*.pyc")

@@ -4,7 +4,7 @@ Each module exports ``register()``/``unregister()``; they are called in ``MODULE
 and undone in reverse.
 """
 
-from . import command, preferences, properties
+from .data import preferences, settings
 from .ui import design as design_ui
 from .ui import lights as lights_ui
 from .ui import operators, panels
@@ -13,8 +13,8 @@ from .ui import presets as presets_ui
 from .ui import transfer as transfer_ui
 
 MODULES = (
-    preferences, properties, operators, panels, presets_ui, design_ui, lights_ui, transfer_ui,
-    photo_ui, command,
+    preferences, settings, operators, panels, presets_ui, design_ui, lights_ui, transfer_ui,
+    photo_ui,
 )
 
 

@@ -52,28 +52,25 @@ def run(args):
 def apply_and_save(args, preset, out):
     """Open the .blend, set the preset, apply the group, save to ``out``."""
     from .. import api
-    from ..blender import scene_data
-    from ..blender.presets import files as preset_io
-    from ..blender.shading import materials, notes
     from ..formats.presets import PresetError
 
     open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
     scene = pick_scene(args.scene)
     objects = objects_to_apply(scene, args.objects)
     try:  # what the UI's Load and Import do (the preset's name recorded from its metadata)
-        preset_io.import_preset(scene, preset, args.animation.upper())
+        api.import_preset(scene, preset, args.animation.upper())
     except (PresetError, OSError) as error:
         raise CommandError(str(error)) from None
     except api.AnimatedError as error:
         raise CommandError(str(error).replace("(animation='KEY', ", "(")
                            .replace("(animation='CLEAR', ", "(")) from None
-    note = scene_data.last_note()
+    note = api.last_note()
     if note:
         say(f"SH lighting {note}")
-    result = api.apply_to_materials(materials.materials_of(objects), scene, args.mode)
+    result = api.apply_to_materials(api.materials_of(objects), scene, args.mode)
     for name, reason in result.skipped:
         say(f"skipped material '{name}': {reason}")
-    for name in materials.objects_without_material(objects):
+    for name in api.objects_without_material(objects):
         say(f"skipped object '{name}': it has no material (give it one to light it)")
     if not result.changed:
         raise CommandError(
@@ -82,7 +79,7 @@ def apply_and_save(args, preset, out):
     say(f"SH lighting applied to {len(result.changed)} material(s): "
         + ", ".join(result.changed))
     if args.mode == "KEEP_BSDF":
-        for line in notes.shared_scene_notes(scene, result.changed):
+        for line in api.shared_scene_notes(scene, result.changed):
             say(f"warning: {line}")
     try:
         save_blend(out, overwrite=args.in_place or args.overwrite)
@@ -94,12 +91,12 @@ def apply_and_save(args, preset, out):
 
 def read_preset_argument(text, blend):
     """(path, coefficients) of the PRESET argument (``//`` relative to ``blend``)."""
-    from ..blender.presets import files as preset_io
+    from .. import api
     from ..formats.presets import PresetError
 
     path = blend_relative(text, blend, "PRESET")
     try:
-        return path, preset_io.read_preset_file(path)[0]
+        return path, api.read_preset_file(path)[0]
     except (PresetError, OSError) as error:
         raise CommandError(str(error)) from None
 

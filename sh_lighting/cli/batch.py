@@ -162,8 +162,8 @@ def batch_one(path, out, args, inputs):
 
     ``inputs``: ``file_ids`` of every file the batch reads (a preset never replaces one).
     """
-    from ..blender.presets import files as preset_io
-    from ..blender.world.hdri import hdri_metadata
+    from .. import api
+    from ..api import hdri_metadata
     from .compute import read_hdri_file
 
     if not path.is_file():
@@ -179,5 +179,5 @@ def batch_one(path, out, args, inputs):
         return "skipped"
     hdri = read_hdri_file(path, args.nonfinite)
     interrupts.check()
-    preset_io.export_coefficients(hdri.coefficients, out, "sh_lighting", True, hdri_metadata(hdri))
+    api.export_coefficients(hdri.coefficients, out, "sh_lighting", True, hdri_metadata(hdri))
     return "ok"

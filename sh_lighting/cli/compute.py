@@ -58,8 +58,9 @@ def add_arguments(p, prog):
 def run(args):
     args.projection_given = args.projection is not None
     args.projection = args.projection or "equirect"
-    from ..blender.presets import files as preset_io
-    from ..blender.world.hdri import ERROR_NORMALS, hdri_metadata
+    from .. import api
+    from ..api import HDRI_ERROR_NORMALS as ERROR_NORMALS
+    from ..api import hdri_metadata
     from ..core.sh import coefficient_table
 
     is_blend = args.input is None or Path(args.input).suffix.lower() == ".blend"
@@ -76,7 +77,7 @@ def run(args):
     if is_blend:
         source, scene, coeffs, metadata = _world(args)
         hdri = None
-        environment = preset_io.world_environment(scene) if args.format == "gltf" else None
+        environment = api.world_environment(scene) if args.format == "gltf" else None
     else:
         if args.lights is not None and args.projection == "mirror_ball":
             raise CommandError("--lights takes equirectangular images only: leave out "
@@ -107,7 +108,7 @@ def run(args):
         try:
             with timed_stage("writing (with the specular cube)" if args.format == "gltf"
                              else "writing"):
-                path = preset_io.export_coefficients(
+                path = api.export_coefficients(
                     coeffs, out, args.format, args.overwrite, metadata, environment,
                     args.filament_frame,
                 )
@@ -132,7 +133,7 @@ def how_read(source, hdri, given):
 
 def read_hdri_file(path, nonfinite, projection="equirect"):
     """``blender.world.hdri.read_hdri`` of ``path``, its errors as one CommandError line."""
-    from ..blender.world.hdri import read_hdri
+    from ..api import read_hdri
     from ..core.equirect import NonFiniteError
 
     try:
@@ -148,7 +149,6 @@ def read_hdri_file(path, nonfinite, projection="equirect"):
 def _world(args):
     """(.blend path, scene, coefficients, metadata) of the world of the .blend ``args.input``."""
     from .. import api
-    from ..blender.presets import files as preset_io
 
     source = open_blend(args.input)
     scene = pick_scene(args.scene)
@@ -158,7 +158,7 @@ def _world(args):
     except ValueError as error:  # the API's advice, in this command's words
         message = str(error).replace("pass nonfinite='zero'", "pass --nonfinite zero")
         raise CommandError(f"{source}: {message}") from None
-    metadata = preset_io.scene_metadata(scene)
+    metadata = api.scene_metadata(scene)
     metadata["name"] = source.stem
     origin = metadata.get("source")
     how = f"image {origin}" if origin else "a Cycles capture"
@@ -172,7 +172,7 @@ def _lights(source, scene, hdri, count):
     prints them, returns the rest's (9, 3) coefficients and the number of lights."""
     try:
         if scene is None:
-            from ..blender.world.hdri import hdri_lights
+            from ..api import hdri_lights
 
             extraction, coeffs = hdri_lights(hdri, count)
             found = [(light.direction, light.angular_diameter, light.colour, light.strength,

@@ -81,7 +81,6 @@ def add_arguments(p, prog):
 
 def run(args):
     from .. import api
-    from ..blender.presets import files as preset_io
     from ..core.sh import coefficient_table
 
     image = input_file(args.image, "photo", "give the photo's image file")
@@ -135,7 +134,7 @@ def run(args):
         metadata = {"name": image.stem, "notes": f"Fitted to a grey ball in {image.name}: "
                     f"{fit.summary()}."}
         try:
-            path = preset_io.export_coefficients(coeffs, out, args.format, args.overwrite,
+            path = api.export_coefficients(coeffs, out, args.format, args.overwrite,
                                                  metadata)
         except (OSError, ValueError) as error:
             raise CommandError(str(error)) from None

@@ -42,7 +42,7 @@ def add_arguments(p, prog):
 
 
 def run(args):
-    from ..blender import scene_data
+    from .. import api
 
     if not args.output.strip():
         raise CommandError("--output is empty: give a path such as renders/shot_####")
@@ -55,7 +55,7 @@ def run(args):
             f"scene '{scene.name}' writes a movie ({scene.render.image_settings.file_format}): "
             "set an image format (PNG, OpenEXR, ...) and encode the frames afterwards"
         )
-    if not scene_data.has_coefficients(scene):
+    if not api.has_coefficients(scene):
         say(f"warning: scene '{scene.name}' has no SH coefficients: it renders without them")
     if args.output_folder is not None:
         for frame in {frames[0], frames[-1]}:
@@ -100,14 +100,14 @@ def frame_range(args, scene):
 
 
 def set_engine(scene, engine, samples):
-    from ..blender import compat
+    from .. import api
 
     if engine is not None:
-        scene.render.engine = "CYCLES" if engine == "CYCLES" else compat.eevee_engine_id()
+        scene.render.engine = "CYCLES" if engine == "CYCLES" else api.eevee_engine_id()
     if samples is not None:
         if scene.render.engine == "CYCLES":
             scene.cycles.samples = samples
-        elif scene.render.engine == compat.eevee_engine_id():
+        elif scene.render.engine == api.eevee_engine_id():
             scene.eevee.taa_render_samples = samples
         else:
             raise CommandError(f"--samples does not apply to engine {scene.render.engine}")
@@ -127,13 +127,13 @@ def check_lighting(scene, frame):
     render black (issue 20 item 13); nothing when the scene has no coefficients."""
     import bpy
 
-    from ..blender import scene_data
+    from .. import api
 
-    if not scene_data.has_coefficients(scene):
+    if not api.has_coefficients(scene):
         return
     evaluated = scene.evaluated_get(bpy.context.evaluated_depsgraph_get())
     try:
-        scene_data.validate(scene_data.get_coefficients(evaluated))
+        api.validate_coefficients(api.get_coefficients(evaluated))
     except ValueError as error:
         raise CommandError(f"frame {frame} not rendered: {error}") from None
 

@@ -14,7 +14,7 @@ S-2014-004 for AP1 with the ACES white). From them:
 * ``conversion_matrix(source, target)``: RGB of ``source`` to RGB of ``target`` through XYZ,
   with a Bradford chromatic adaptation between white points (ACEScg's white is ~D60), which is
   what Blender's OpenColorIO configuration does (checked against ``mathutils.Color`` in
-  tests/blender/test_colour_spaces.py to 1e-4);
+  tests/blender/world/test_colour_spaces.py to 1e-4);
 * ``convert_coefficients(coeffs, source, target)``: L_lm (or any (..., 3) RGB) converted;
   projection is linear in the radiance, so converting L_lm equals converting the image.
 
@@ -24,7 +24,7 @@ which Cycles applies in float32 to sRGB textures of a Rec.709 file), then the ma
 image's primaries to the working space (what OpenColorIO applies on load otherwise):
 ``byte_decoding`` tabulates the curve for the 256 bytes and gives the matrix, ``decode_bytes``
 applies them (a table look-up per channel, a 3×3 product per texel). Checked against Cycles
-captures for every space in both a Rec.709 and an ACEScg file (tests/blender/test_colour_spaces.py).
+captures for every space in both a Rec.709 and an ACEScg file (tests/blender/world/test_colour_spaces.py).
 """
 
 import numpy as np

@@ -1,7 +1,7 @@
 """Blender's mirror-ball environment mapping and the lighting coefficients of a mirror-ball image.
 
 Convention (Cycles' Environment Texture, projection "Mirror Ball"; checked by rendering the
-world with a panoramic camera, see tests/blender/test_world.py): the image is a chrome ball
+world with a panoramic camera, see tests/blender/world/test_world.py): the image is a chrome ball
 photographed from −Y looking along +Y, z up. With x = 2u − 1 and z = 2v − 1 (u, v in [0, 1],
 v from the bottom), a point of the unit disk is the ball normal n = (x, −s, z), s = √(1 − x² − z²),
 and it shows the direction the view ray (0, 1, 0) is reflected to:

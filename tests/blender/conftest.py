@@ -1,21 +1,3 @@
-"""Every Blender test starts from factory settings and leaves them behind (a clean Blender)."""
+"""A clean Blender per test (tests/blender_fixtures.py)."""
 
-import bpy
-import pytest
-
-
-@pytest.fixture(autouse=True)
-def factory_blender():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    yield
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-
-
-@pytest.fixture
-def addon():
-    """The add-on registered as the plain package ``sh_lighting`` for the test's duration."""
-    import sh_lighting
-
-    sh_lighting.register()
-    yield sh_lighting
-    sh_lighting.unregister()
+from blender_fixtures import addon, factory_blender  # noqa: F401

@@ -74,7 +74,7 @@ def test_materials_must_be_an_iterable_of_materials(addon, function):
 @pytest.fixture
 def user_dir(tmp_path, monkeypatch):
     """Blender's user folder in ``tmp_path`` (checked), so the real one is never touched."""
-    from sh_lighting.blender.presets import files as preset_io
+    from sh_lighting.blender.presets import preset_io
 
     resources = tmp_path / "user_resources"
     monkeypatch.setenv("BLENDER_USER_RESOURCES", str(resources))
@@ -97,7 +97,7 @@ def user_dir(tmp_path, monkeypatch):
     ],
 )
 def test_user_preset_names_keep_their_letters(addon, user_dir, name, stem):
-    from sh_lighting.blender.presets import files as preset_io
+    from sh_lighting.blender.presets import preset_io
 
     scene = bpy.context.scene
     api.set_coefficients(scene, KNOWN)
@@ -222,7 +222,7 @@ def test_a_bad_custom_property_is_named_by_panel_api_and_export_and_repaired(
         addon, tmp_path, name, value, message):
     """Issue 20 item 17: the panel's draw raised on every redraw, API and export gave raw
     numpy errors."""
-    from sh_lighting.blender import scene_data
+    from sh_lighting.blender.data import scene_data
     from sh_lighting.blender.ui import design as design_ui
     from sh_lighting.blender.ui import panels
     from ui_layout import RecordingLayout

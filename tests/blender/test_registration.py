@@ -13,7 +13,7 @@ from blender_files import SCRIPT
 from sh_lighting import blender
 from sh_lighting.blender.design import edits as design
 from sh_lighting.blender.ui import operators, panels
-from sh_lighting.blender import scene_data
+from sh_lighting.blender.data import scene_data
 from sh_lighting.core.sh import COEFFICIENT_NAMES
 from ui_layout import RecordingLayout
 

@@ -20,7 +20,7 @@ from sh_lighting.core.glossy import (
 )
 from sh_lighting.core.rotation import euler_xyz_matrix
 
-from .quadrature import sphere_rule
+from quadrature import sphere_rule
 
 SUN = np.array([0.6, -0.3, 0.5]) / np.linalg.norm([0.6, -0.3, 0.5])
 

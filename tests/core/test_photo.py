@@ -3,7 +3,7 @@
 Photos here are computed, not rendered: a grey ball's radiance albedo · E(n) / π at each pixel
 centre's normal, E either the exact nine-term polynomial (eq. 13) or the true irradiance of an
 equirect world (eq. 1, ``reference_irradiance``). Cycles renders are in
-tests/blender/test_photo.py.
+tests/blender/photo/test_photo.py.
 """
 
 from functools import lru_cache

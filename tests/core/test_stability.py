@@ -472,7 +472,7 @@ def eval_basis_sum(L, n):
 
 # The node group (sh_lighting/blender/shading/nodes.py) computes each factor from n = (x, y, z) as below
 # and sums the terms L_lm × factor in a chain of Multiply Add nodes whose order it chooses;
-# tests/blender/test_node_precision.py checks, node by node, that this is what it builds.
+# tests/blender/shading/test_node_precision.py checks, node by node, that this is what it builds.
 NODE_ORDERS = {
     "L00 first, index order": (0, 1, 2, 3, 4, 5, 6, 7, 8),
     "L00, L20, then index": (0, 6, 1, 2, 3, 4, 5, 7, 8),

@@ -69,7 +69,7 @@ CHECKS = (
     "enable in Preferences brings them back",
 )
 # The viewport after every other write (typed values, Reset, Undo, Exposure, a second
-# Compute, a second frame) is not checked here: tests/blender/test_live.py checks each writer
+# Compute, a second frame) is not checked here: tests/blender/data/test_live.py checks each writer
 # against the evaluated scene and a render. Here the viewport is checked after the writes a
 # window adds (Apply, a drag, a menu, keyframes) and in each engine's Rendered mode.
 

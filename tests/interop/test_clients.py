@@ -22,7 +22,7 @@ from lightings import (
     texel_map,
 )
 
-from sh_lighting.blender.presets import files as preset_io
+from sh_lighting.blender.presets import preset_io
 from sh_lighting.formats.gltf import CUBE_SIZE, LEVELS, radiance_image
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.frames import BLENDER_TO_Y_UP

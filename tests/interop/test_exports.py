@@ -16,7 +16,7 @@ import pytest
 from blender_files import write_exr
 from lightings import GLTF_NORMALS, NORMALS, TOLERANCE, deviation, texel_map
 
-from sh_lighting.blender import scene_data
+from sh_lighting.blender.data import scene_data
 from sh_lighting.core.frames import BLENDER_TO_Y_UP
 from sh_lighting.core.world_map import to_world_direction
 

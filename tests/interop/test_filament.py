@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 from lightings import NAMES, NORMALS, TOLERANCE, expected, lighting
 
-from sh_lighting.blender.presets import files as preset_io
+from sh_lighting.blender.presets import preset_io
 from sh_lighting.formats.interop import BLENDER_TO_CMGEN
 from sh_lighting.core.frames import BLENDER_TO_Y_UP
 

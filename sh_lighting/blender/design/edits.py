@@ -7,7 +7,7 @@ with the edit; edits are not new Reset values). Errors are ValueError/LookupErro
 then. Angles are in radians, like everywhere in Blender's Python API.
 
 The world-reading tools (Match Mapping, the window's error against the world) need
-the world's Environment Texture image: they read it with ``world.read_world``, the reader
+the world's Environment Texture image: they read it with ``reader.read_world``, the reader
 Compute from World uses, so they see exactly what it sees (Strength and rotation as
 evaluated at the current frame, pixels decoded as Blender renders them).
 """
@@ -28,9 +28,9 @@ from ...core.world_map import (
     map_irradiance,
     mapping_rotation,
 )
-from .. import compat, scene_data
+from ..data import compat, scene_data
 from ..world import compute
-from ..world import reader as world
+from ..world import reader
 
 # Normals at which a window's error is measured against the world (brute force, eq. 1).
 COST_NORMALS = 256
@@ -148,11 +148,11 @@ def negative_warning(scene):
 
 
 def _world_image(scene, what, equirect=True):
-    """The scene's world as a ``world.ImageSource`` (``world.read_world``), what Compute from
+    """The scene's world as a ``reader.ImageSource`` (``reader.read_world``), what Compute from
     World reads; DesignError when it is not an image (or not an equirect one, if asked),
-    ``world.WorldError`` for a broken world."""
-    source = world.read_world(scene)
-    if isinstance(source, world.ProceduralSource):
+    ``reader.WorldError`` for a broken world."""
+    source = reader.read_world(scene)
+    if isinstance(source, reader.ProceduralSource):
         raise DesignError(
             f"world '{source.world}' is not an Environment Texture image read directly "
             f"({source.reason}): {what} needs World Output ← Background ← Environment "

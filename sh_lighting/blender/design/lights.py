@@ -2,7 +2,7 @@
 rest (``core.lights``; one light is what Split Sun was).
 
 ``extract_lights(scene, count, error_target, size_limit)`` reads the world's equirect
-Environment Texture (``world.read_world``: the Background's Strength and the Mapping node's
+Environment Texture (``reader.read_world``: the Background's Strength and the Mapping node's
 rotation as evaluated at the current frame, the pixels decoded as Compute from World sees
 them), takes up to ``count`` sources out, makes one Sun light per source (aimed along the
 source's direction in the world, angle from its size, colour and strength from its texels ×
@@ -37,9 +37,9 @@ from mathutils import Matrix, Vector
 
 from ...core import lights as core_lights
 from ...core.world_map import map_coefficients, sun_light_rotation, to_world_direction
-from .. import scene_data
-from ..world import reader as world
-from . import edits as design
+from ..data import scene_data
+from ..world import reader
+from . import edits
 
 REGISTRY = "sh_lighting_lights"  # scene property: {"lights": [Object], "collection": Collection}
 LEGACY_MARKERS = ("sh_lighting_light", "sh_lighting_sun")  # object properties before it
@@ -195,7 +195,7 @@ def _check_lights(extraction, strength):
     for index, light in enumerate(extraction.lights, 1):
         energy = light.strength * strength
         if not energy <= FLOAT32_MAX:
-            raise design.DesignError(
+            raise edits.DesignError(
                 f"light {index} would have strength {energy:.3g} W/m², beyond what Blender "
                 f"stores (float32, {FLOAT32_MAX:.3g}): lower the world's Strength or the "
                 "image's values")
@@ -211,29 +211,29 @@ def extract_lights(scene, count=3, error_target=None, size_limit=SIZE_LIMIT):
 
     ``error_target``: stop once the mean error of SH + lights is at most this fraction of the
     world's light. ``size_limit``: radians across; larger sources stay in the SH (up to
-    ``2 core.lights.LARGEST_RADIUS``). A ValueError (``world.WorldError``,
-    ``design.DesignError``) with nothing changed when the world is not an equirect image, an
+    ``2 core.lights.LARGEST_RADIUS``). A ValueError (``reader.WorldError``,
+    ``edits.DesignError``) with nothing changed when the world is not an equirect image, an
     argument is wrong or a light would not fit Blender's float32 values.
     """
     started = time.perf_counter()
-    source = world.read_world(scene)
-    if isinstance(source, world.ProceduralSource):
-        raise design.DesignError(
+    source = reader.read_world(scene)
+    if isinstance(source, reader.ProceduralSource):
+        raise edits.DesignError(
             f"world '{source.world}' is not an Environment Texture image read directly "
             f"({source.reason}): Extract Lights needs World Output ← Background ← Environment "
             "Texture [← Mapping ← Texture Coordinate]")
     if source.projection != "EQUIRECTANGULAR":
-        raise design.DesignError(
+        raise edits.DesignError(
             f"Extract Lights needs an equirectangular world image; image "
             f"'{source.image.name}' of world '{source.world}' is a "
             f"{source.projection.replace('_', ' ').lower()}")
     strength = float(source.strength)
     if not strength > 0.0:
-        raise design.DesignError(
+        raise edits.DesignError(
             f"world '{source.world}' has Strength {strength:g}: no light to extract")
     extraction = core_lights.extract_lights(source.pixels(), count, error_target,
                                              max_radius=_half(size_limit),
-                                             luminance=design.luminance())
+                                             luminance=edits.luminance())
     rest = map_coefficients(extraction.rest, strength, source.rotation)
     scene_data.validate(rest)  # fail before anything changes
     _check_lights(extraction, strength)

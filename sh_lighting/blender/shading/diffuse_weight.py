@@ -19,7 +19,7 @@ Reroutes are looked through by ``node_links.source_socket``, the project's one w
 
 from typing import NamedTuple
 
-from ..node_links import source_socket
+from ..data.node_links import source_socket
 
 
 def linked_socket(socket):

@@ -33,8 +33,8 @@ import bpy
 import numpy as np
 
 from ...core.glossy import ROUGHNESS_LEVELS, environment_brdf_table, level_maps
-from .. import compat
-from ..node_links import source_socket
+from ..data import compat
+from ..data.node_links import source_socket
 from ..world.reader import WorldError, read_world, world_radiance
 from .keep_bsdf import PRINCIPLED, coverage_factors, dielectric_f0, product
 

@@ -31,8 +31,8 @@ dependency cycle Blender warns about.) Remove gives each input the held node's v
 keyframes and drivers back and deletes it (``release``).
 """
 
-from .. import compat
-from ..node_links import source_socket
+from ..data import compat
+from ..data.node_links import source_socket
 from .diffuse_weight import DIFFUSE_SHADERS
 from .world_diffuse import WORLD_MARKER  # noqa: F401  (the world's mark; kept importable here)
 

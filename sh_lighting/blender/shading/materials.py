@@ -42,7 +42,7 @@ from typing import NamedTuple
 import bpy
 
 from ...choices import APPLY_MODES
-from .. import compat
+from ..data import compat
 from . import glossy, keep_bsdf, world_diffuse
 from .diffuse_weight import diffuse_leaves, linked_socket, surface_leaves
 from .nodes import GROUP_NAME, ensure_node_group
@@ -53,14 +53,6 @@ NODE_MARKER = "sh_lighting_original_links"
 RECORD_VERSION = 2
 MODES = APPLY_MODES
 DEFAULT_MODE = MODES[0]
-MODE_ITEMS = (
-    ("KEEP_BSDF", "Keep BSDF",
-     "Keep the material's BSDF (lamps, shadows, reflections); SH replaces the world's diffuse "
-     "light (Cycles)"),
-    ("EMISSION", "Emission Only",
-     "Drive the surface by the SH emission alone: exact and noise free, no lamps or "
-     "reflections"),
-)
 GROUP_NODE_WIDTH = 200.0  # px in the node editor: "SH Irradiance" and its sockets in full
 
 # BSDF node type -> its diffuse colour input.

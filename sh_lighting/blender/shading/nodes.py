@@ -35,8 +35,8 @@ import bpy
 
 from ...core.irradiance import C1, C2, C3, C4, C5
 from ...core.sh import COEFFICIENT_NAMES
-from .. import scene_data
-from ..scene_data import GAIN_NAMES, PROPERTY_NAMES
+from ..data import scene_data
+from ..data.scene_data import GAIN_NAMES, PROPERTY_NAMES
 
 GROUP_NAME = "SH Irradiance"
 # Custom property on the node group; its value is the layout version of the tree inside.

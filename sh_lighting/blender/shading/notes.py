@@ -5,7 +5,7 @@ item 5). Whatever a mode cannot do is said where it matters, never silently drop
 
 import bpy
 
-from .. import scene_data
+from ..data import scene_data
 from . import glossy, world_diffuse
 from .keep_bsdf import PRINCIPLED
 from .materials import mode_of, scene_materials, surface_shaders

@@ -24,7 +24,7 @@ and deletes exactly those nodes. What is changed is tagged for the open viewport
 
 import json
 
-from .. import compat
+from ..data import compat
 
 # Custom property of a world prepared here: JSON {"diffuse": original visibility, "nodes": [...]}.
 WORLD_MARKER = "sh_lighting_world_diffuse"

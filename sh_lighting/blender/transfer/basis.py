@@ -20,7 +20,7 @@ difference).
 
 import bpy
 
-from .. import compat
+from ..data import compat
 from ...core.sh import Y1, Y2_XY, Y20, Y22, Y00
 
 WORLD_NAME = "SH Transfer Basis (temporary)"

@@ -14,7 +14,7 @@ import zlib
 
 import numpy as np
 
-from ..scene_data import PROPERTY_NAMES
+from ..data.scene_data import PROPERTY_NAMES
 
 ATTRIBUTE_NAMES = tuple(name.replace("sh_L", "sh_T", 1) for name in PROPERTY_NAMES)
 RECORD = "sh_transfer"

@@ -14,9 +14,9 @@ import math
 import bpy
 
 from ...core.minimum import negative_light_warning
-from .. import scene_data
-from ..design import edits as design
-from ..world import reader as world
+from ..data import scene_data
+from ..design import edits
+from ..world import reader
 from . import lights as lights_ui
 from . import panels, previews
 from .polls import NO_COEFFICIENTS, coefficients_poll, scene_poll
@@ -75,7 +75,7 @@ class SHLIGHT_OT_rotate(_Live, _Edit, bpy.types.Operator):
     )
 
     def apply(self, scene):
-        design.rotate(scene, self.yaw, self.pitch, self.roll)
+        edits.rotate(scene, self.yaw, self.pitch, self.roll)
 
 
 def mapping_problem(context):
@@ -86,7 +86,7 @@ def mapping_problem(context):
         source = panels.read_world(context)
     except ValueError as why:  # WorldError: no world, no image, ...
         return str(why)
-    if isinstance(source, world.ProceduralSource):
+    if isinstance(source, reader.ProceduralSource):
         return f"Needs an Environment Texture world image; {source.reason}"
     if source.rotation is None:
         return (f"World '{source.world}' has no Texture Coordinate → Mapping in front of its "
@@ -112,7 +112,7 @@ class SHLIGHT_OT_match_mapping(_Edit, bpy.types.Operator):
         return True
 
     def apply(self, scene):
-        design.match_mapping(scene)
+        edits.match_mapping(scene)
         return "SH lighting rotated by the world's Mapping node rotation"
 
 
@@ -128,7 +128,7 @@ class SHLIGHT_OT_exposure(_Live, _Edit, bpy.types.Operator):
     )
 
     def apply(self, scene):
-        design.exposure(scene, self.stops)
+        edits.exposure(scene, self.stops)
 
 
 class SHLIGHT_OT_saturation(_Live, _Edit, bpy.types.Operator):
@@ -157,7 +157,7 @@ class SHLIGHT_OT_saturation(_Live, _Edit, bpy.types.Operator):
     )
 
     def apply(self, scene):
-        design.saturation(scene, self.amount, self.band)
+        edits.saturation(scene, self.amount, self.band)
 
 
 class SHLIGHT_OT_band_gains(_Live, _Edit, bpy.types.Operator):
@@ -181,7 +181,7 @@ class SHLIGHT_OT_band_gains(_Live, _Edit, bpy.types.Operator):
     )
 
     def apply(self, scene):
-        design.band_gains(scene, self.ambient, self.directional, self.quadratic)
+        edits.band_gains(scene, self.ambient, self.directional, self.quadratic)
 
 
 class SHLIGHT_OT_flip_vertical(_Edit, bpy.types.Operator):
@@ -191,7 +191,7 @@ class SHLIGHT_OT_flip_vertical(_Edit, bpy.types.Operator):
     bl_label = "Lit from Below"
 
     def apply(self, scene):
-        design.flip_vertical(scene)
+        edits.flip_vertical(scene)
 
 
 class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
@@ -214,7 +214,7 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
     )
     width: bpy.props.FloatProperty(
         name="Width", description="Width of the Hanning and Lanczos windows (3: the usual L + 1)",
-        default=design.DEFAULT_WIDTH, min=0.01, soft_min=1.0, soft_max=10.0,
+        default=edits.DEFAULT_WIDTH, min=0.01, soft_min=1.0, soft_max=10.0,
     )
 
     @classmethod
@@ -241,14 +241,14 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
         row.prop(self, "width")
 
     def apply(self, scene):
-        return window_report(design.apply_window(scene, self.kind, self.width))
+        return window_report(edits.apply_window(scene, self.kind, self.width))
 
 
 def window_report(result):
-    """One readable line about a ``design.WindowResult``: the band factors and the error
+    """One readable line about a ``edits.WindowResult``: the band factors and the error
     against the world image with and without the window, or why it is not shown."""
     w = result.window
-    text = (f"{design.LABELS[result.kind]} window applied: directional ×{w[1]:.2f}, "
+    text = (f"{edits.LABELS[result.kind]} window applied: directional ×{w[1]:.2f}, "
             f"quadratic ×{w[2]:.2f}")
     cost = result.cost
     if cost is not None:
@@ -296,8 +296,8 @@ def draw_design(layout, context):
     col = layout.column(align=True)
     col.label(text="Tame ringing")
     row = col.row(align=True)
-    for kind in design.WINDOWS:
-        row.operator("shlight.window", text=design.LABELS[kind]).kind = kind
+    for kind in edits.WINDOWS:
+        row.operator("shlight.window", text=edits.LABELS[kind]).kind = kind
     lights_ui.draw_lights(layout.row(align=True))
 
 

@@ -10,9 +10,11 @@ import time
 
 import bpy
 
-from .. import scene_data
+from ...choices import APPLY_MODE_ITEMS
+from ..data import scene_data
 from ..shading import materials, notes
 from ..transfer import apply as transfer_apply
+from ..design import compute as design_compute
 from ..world import compute
 from .polls import coefficients_poll, scene_poll, world_poll
 
@@ -80,7 +82,7 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
         if workspace is not None:
             workspace.status_text_set("Computing the lighting of the world…")
         try:
-            _coeffs, info = compute.compute_and_store(
+            _coeffs, info = design_compute.compute_from_world(
                 context.scene, error_normals=compute.REPORT_ERROR_NORMALS)
         except ValueError as error:  # WorldError and invalid coefficients
             self.report({"ERROR"}, str(error))
@@ -131,7 +133,7 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
     mode: bpy.props.EnumProperty(
         name="Mode",
         items=(("SCENE", "Panel's Mode", "The Mode chosen in the panel (the scene's setting)"),
-               *materials.MODE_ITEMS),
+               *APPLY_MODE_ITEMS),
         default="SCENE",
         description="Keep the BSDF (SH replaces the world's diffuse light) or emission only; "
                     "by default the Mode chosen in the panel",
@@ -167,7 +169,7 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         changed, skipped = len(result.changed), len(result.skipped)
-        label = dict((key, name) for key, name, _text in materials.MODE_ITEMS)[mode]
+        label = dict((key, name) for key, name, _text in APPLY_MODE_ITEMS)[mode]
         message = f"SH lighting ({label}) applied to {changed} material(s), {skipped} skipped"
         if widened:
             message += (f", {len(widened)} of them beyond the selection: Keep BSDF turns the "

@@ -23,10 +23,10 @@ import bpy
 from ...core.edits import describe_coefficients
 from ...core.minimum import negative_light_warning
 from ...core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
-from .. import scene_data
-from ..design import edits as design
+from ..data import scene_data
+from ..design import edits
 from ..shading import notes
-from ..world import reader as world
+from ..world import reader
 from . import presets as presets_ui
 from . import previews
 
@@ -72,20 +72,20 @@ def ui_scale(context):
 
 
 def read_world(context):
-    """``world.read_world`` of the context's scene as its view layer's depsgraph last
+    """``reader.read_world`` of the context's scene as its view layer's depsgraph last
     evaluated it (drawing and polls must not trigger an evaluation); a WorldError for a
     world that gives no lighting."""
     depsgraph = context.view_layer.depsgraph if context.view_layer is not None else None
-    return world.read_world(context.scene, depsgraph)
+    return reader.read_world(context.scene, depsgraph)
 
 
 def world_kind(context):
     """"image" (read directly), "procedural" (captured by a Cycles render) or "none"."""
     try:
         source = read_world(context)
-    except world.WorldError:
+    except reader.WorldError:
         return "none"
-    return "procedural" if isinstance(source, world.ProceduralSource) else "image"
+    return "procedural" if isinstance(source, reader.ProceduralSource) else "image"
 
 
 def sphere_caption(stops):
@@ -247,7 +247,7 @@ class SHLIGHT_OT_show_channels(bpy.types.Operator):
         if scene is not None and scene_data.has_coefficients(scene):
             try:
                 text = describe_coefficients(scene_data.get_coefficients(scene),
-                                             design.luminance())[props.index]
+                                             edits.luminance())[props.index]
             except ValueError:
                 pass
         return f"{text}.\nClick to show or hide its R, G, B values"

@@ -9,7 +9,8 @@ stored coefficients' provenance ("PHOTO").
 import bpy
 
 from ...core.photo import DEFAULT_ALBEDO, DEFAULT_MARGIN, PRIORS
-from .. import photo, scene_data
+from ..photo import fit
+from ..data import scene_data
 from .panels import sub_panels
 from .polls import scene_poll
 
@@ -142,12 +143,12 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
             return {"CANCELLED"}
         direction = tuple(self.direction) if self.camera == "DIRECTION" else None
         chrome = self.chrome_filepath or None
-        second = (photo.SecondPhoto(self.second_filepath, tuple(self.second_circle),
+        second = (fit.SecondPhoto(self.second_filepath, tuple(self.second_circle),
                                     direction=tuple(self.second_direction),
                                     roll=self.second_roll)
                   if self.prior == "photo" and self.second_filepath else None)
         try:
-            _coeffs, fit = photo.coefficients_from_photo(
+            _coeffs, result = fit.coefficients_from_photo(
                 context.scene, self.filepath, tuple(self.circle), direction=direction,
                 roll=self.roll, projection=self.projection, focal_mm=self.focal_mm,
                 sensor_mm=self.sensor_mm, albedo=self.albedo, margin=self.margin,
@@ -156,12 +157,12 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, f"Match Photo: {error}")
             return {"CANCELLED"}
-        kind = {"WARNING"} if fit.residual > WARN_RESIDUAL else {"INFO"}
+        kind = {"WARNING"} if result.residual > WARN_RESIDUAL else {"INFO"}
         note = (" (large: is the ball matte and the circle on it?)"
-                if fit.residual > WARN_RESIDUAL else "")
+                if result.residual > WARN_RESIDUAL else "")
         exposure = scene_data.provenance(context.scene).get("exposure_summary")
         both = f"; {exposure}" if exposure else ""
-        self.report(kind, f"SH lighting from the photo: {fit.summary()}{note}{both}")
+        self.report(kind, f"SH lighting from the photo: {result.summary()}{note}{both}")
         return {"FINISHED"}
 
 
@@ -239,7 +240,7 @@ class SHLIGHT_OT_photo_detect(bpy.types.Operator):
     def execute(self, context):
         image = context.space_data.image
         try:
-            guess = photo.detect_circle(image.filepath)
+            guess = fit.detect_circle(image.filepath)
         except ValueError as error:
             self.report({"ERROR"}, f"Match Photo: {error}")
             return {"CANCELLED"}

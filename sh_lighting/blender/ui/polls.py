@@ -1,6 +1,6 @@
 """The checks operators share in ``poll``: each says why it fails through poll_message_set."""
 
-from .. import scene_data
+from ..data import scene_data
 
 NO_COEFFICIENTS = "No SH coefficients yet: run Compute from World first"
 

@@ -39,8 +39,8 @@ from bpy.props import BoolProperty, EnumProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ...formats.presets import PresetError
-from .. import scene_data
-from ..presets import files as preset_io
+from ..data import scene_data
+from ..presets import preset_io
 from .polls import coefficients_poll, scene_poll
 
 LOAD = "shlight.load_preset"

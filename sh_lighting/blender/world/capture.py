@@ -47,7 +47,7 @@ import bpy
 import numpy as np
 
 from ...core.supersample import average_fine_rows, hot_region
-from .. import compat
+from ..data import compat
 from .images import load_image_pixels
 
 #: Samples per pixel: enough for the box filter to average a texel well (a constant world is

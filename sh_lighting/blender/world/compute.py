@@ -14,14 +14,12 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from .. import preferences, properties, scene_data
-from ..design import lights
-from ..shading import glossy
-from . import reader as world
+from ..data import preferences, settings, scene_data
+from . import reader
 
 
 def world_provenance(info):
-    """The provenance ``store`` records for a ``world.WorldInfo``: source "WORLD", the world,
+    """The provenance ``store`` records for a ``reader.WorldInfo``: source "WORLD", the world,
     how it was read, the working colour space of the values and what was read (image, its
     file, projection, Mapping rotation, Strength; or the capture width)."""
     record = {"source": "WORLD", "world": info.world, "method": info.source.upper(),
@@ -47,31 +45,25 @@ def world_provenance(info):
 REPORT_ERROR_NORMALS = 64
 
 
-def compute_and_store(scene, capture_width=None, error_normals=0, nonfinite="raise"):
-    """Compute from World: ``world.world_coefficients`` stored on ``scene`` (``scene_data.store``,
-    source "WORLD": they are also the Reset values), and the lights Extract Lights made deleted
-    (``design.lights.remove_lights``: the whole world is in the SH again); the world's
-    prefiltered maps, if Apply made them, are rewritten (``shading.glossy.follow_world``).
+def compute_and_store(scene, capture_width=None, error_normals=0, nonfinite="raise",
+                      keep_radiance=False):
+    """The world's coefficients (``reader.world_coefficients``) stored on ``scene``
+    (``scene_data.store``, source "WORLD": they are also the Reset values).
 
     ``capture_width`` None: the scene's override, else the add-on preferences', else 256 (an
     odd width rounded up). ``error_normals`` > 0: the ``WorldInfo`` also holds the 9-term error
-    against the world at that many normals. Returns the stored (9, 3) float64 copy and the
-    ``WorldInfo``; a ValueError (``WorldError`` or invalid coefficients) leaves the scene
-    unchanged.
+    against the world at that many normals; ``keep_radiance``: it holds the map that was read.
+    Returns the stored (9, 3) float64 copy and the ``WorldInfo``; a ValueError
+    (``WorldError`` or invalid coefficients) leaves the scene unchanged.
     """
     if capture_width is None:
-        capture_width = properties.capture_width_for(
+        capture_width = settings.capture_width_for(
             getattr(scene, "sh_lighting", None), preferences.addon_preferences()
         )
-    reflected = glossy.maps_of(scene.world) is not None  # Apply made the world's maps
-    coeffs, info = world.world_coefficients(scene, capture_width=_whole(capture_width),
-                                            error_normals=error_normals, nonfinite=nonfinite,
-                                            keep_radiance=reflected)
-    stored = scene_data.store(scene, coeffs, world_provenance(info))
-    lights.remove_lights(scene)  # the whole world is in the SH again: no extracted light
-    if reflected:  # the prefiltered reflections of an applied Keep BSDF follow, same read
-        glossy.follow_world(scene, info.radiance)
-    return stored, info
+    coeffs, info = reader.world_coefficients(scene, capture_width=_whole(capture_width),
+                                             error_normals=error_normals, nonfinite=nonfinite,
+                                             keep_radiance=keep_radiance)
+    return scene_data.store(scene, coeffs, world_provenance(info)), info
 
 
 def report(info, elapsed):
@@ -126,7 +118,7 @@ class WorldMatch:
 
 def world_match(scene):
     """Whether ``scene``'s coefficients are exactly what Compute from World stored from its
-    world as the world reads now (``world.read_world``: image, file, projection, Strength and
+    world as the world reads now (``reader.read_world``: image, file, projection, Strength and
     Mapping rotation as evaluated at the current frame, working space): the one check for
     the glTF export's specular cube, the exported metadata and the windows' error against
     the world. Nothing is re-projected. Returns a ``WorldMatch``.
@@ -141,10 +133,10 @@ def world_match(scene):
     if record.get("method") != "IMAGE":
         return WorldMatch(record, reason="they were computed from a capture, not an image")
     try:
-        source = world.read_world(scene)
-    except world.WorldError as why:
+        source = reader.read_world(scene)
+    except reader.WorldError as why:
         return WorldMatch(record, reason=f"the world cannot be read now: {why}", stale=True)
-    if not isinstance(source, world.ImageSource):
+    if not isinstance(source, reader.ImageSource):
         return WorldMatch(record, reason=f"world '{source.world}' is no longer an image "
                           f"({source.reason})", stale=True)
     changed = _changes(record, source)

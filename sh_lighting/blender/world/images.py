@@ -3,7 +3,7 @@
 The core takes ``(H, W, C)`` float arrays with rows **top to bottom**; Blender's
 ``Image.pixels`` run bottom row first, so the arrays returned here are flipped.
 
-What ``Image.pixels`` holds (observed on Blender 4.2 and 5.0, see tests/blender/test_images.py):
+What ``Image.pixels`` holds (observed on Blender 4.2 and 5.0, see tests/blender/world/test_images.py):
 
 * float images (OpenEXR, Radiance HDR, 16-bit PNG, generated float images): scene-linear
   values in the file's working space: Blender converts them from the image's colour space
@@ -18,7 +18,7 @@ colour space (``core.colour.BYTE_SPACES``: sRGB and the linear spaces; "Non-Colo
 used as it is) to the file's working space as Cycles does it (``core.colour.byte_decoding``):
 mid-grey byte 128 of an sRGB PNG is 0.2159 in a Rec.709 file, pure red is
 (0.613, 0.070, 0.021) in an ACEScg one (tests against Cycles captures in
-tests/blender/test_colour_spaces.py). Images Blender renders otherwise than modelled here
+tests/blender/world/test_colour_spaces.py). Images Blender renders otherwise than modelled here
 raise ``DecodeError`` saying why: 8-bit images in other colour spaces, and 8-bit texels with
 alpha < 1 in Straight or Premultiplied mode (Cycles shows their colour premultiplied, rounded
 in the encoded bytes); the world reader then lets Cycles capture the world instead.
@@ -31,7 +31,7 @@ import numpy as np
 
 from ...core.colour import BYTE_SPACES, byte_decoding, decode_bytes
 from ...formats import exr
-from ..compat import working_space
+from ..data.compat import working_space
 
 
 # Rows of an 8-bit image decoded at a time (at 8192×4096 the whole-image temporaries were

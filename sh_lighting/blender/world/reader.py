@@ -11,7 +11,7 @@ Background's Strength and the Mapping rotation included), writes nothing, and re
   the image, its projection, the Mapping rotation, the Background Strength, the image's
   colour space and the file's working space; ``pixels()`` reads the radiance on demand. The
   Strength scales L, and a Mapping rotation R gives the lighting of the image rotated by R⁻¹
-  (docs/reference.md §3; checked against Cycles renders in tests/blender/test_world.py);
+  (docs/reference.md §3; checked against Cycles renders in tests/blender/world/test_world.py);
 * ``ProceduralSource``: anything else (Sky Texture, gradients, mixes, other colour spaces,
   unsupported Mapping settings, ...), with the reason; ``world_coefficients`` renders it by
   Cycles into an equirectangular panorama (``capture.capture_world``).
@@ -36,8 +36,8 @@ from ...core.mirror_ball import project_mirror_ball
 from ...core.projection import project_equirect
 from ...core.irradiance import error_estimate
 from ...core.world_map import apply_mapping
-from .. import compat
-from ..node_links import MutedLink, source_socket
+from ..data import compat
+from ..data.node_links import MutedLink, source_socket
 from .capture import CaptureError, capture_world
 from .images import (
     DecodeError,
