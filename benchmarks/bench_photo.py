@@ -31,7 +31,7 @@ from tempfile import TemporaryDirectory
 import bpy
 import numpy as np
 
-from sh_lighting.blender.photo.fit.fit import camera_of, chrome_coefficients
+from sh_lighting.blender.photo.fit import camera_of, chrome_coefficients
 from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core.ball_detect import detect_ball
 from sh_lighting.core.downsample import block_downsample

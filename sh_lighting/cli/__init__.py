@@ -3,7 +3,7 @@
 Three ways to run it (``--help`` after any command shows its options):
 
 * ``blender -c sh_lighting <command> ...`` (Blender 4.2+) with the extension installed and
-  enabled: the command the extension registers (``blender/command.py``).
+  enabled: the command the extension registers (``cli/command.py``).
 
 * ``python -m sh_lighting <command> ...`` with a Python where ``bpy`` (Blender as a module) and
   this package are importable, e.g. ``.venv/bin/python -m sh_lighting`` from the repository.
@@ -126,7 +126,7 @@ def main(argv=None, prog=PROG):
 
 
 def run_blender_command(argv):
-    """``blender -c sh_lighting ARGS``: ``main`` on ARGS (registered by blender/command.py).
+    """``blender -c sh_lighting ARGS``: ``main`` on ARGS (registered by cli/command.py).
 
     argparse's own exits (``--help``, wrong arguments) become the return value, which Blender
     makes its exit status, instead of a SystemExit raised inside Blender's command runner.

@@ -87,7 +87,7 @@ def test_zip_holds_manifest_and_package(built_zip):
     assert "blender_manifest.toml" in names
     assert "__init__.py" in names
     assert "core/equirect.py" in names
-    assert "blender/preferences.py" in names
+    assert "blender/data/preferences.py" in names
     # The shipped presets, where preset_io.shipped_preset_dir looks once installed.
     assert "presets/forest.json" in names
     shipped = {f"presets/{p.name}" for p in (package.ROOT / "presets").glob("*.json")}
@@ -123,7 +123,7 @@ def test_install_enable_disable_leaves_no_trace(built_zip, tmp_path):
     assert report["enabled_pref"] is True
     assert report["enabled_check"] == [True, True]
     during_classes = set(report["during"]["classes"]) - set(report["before"]["classes"])
-    assert f"{MODULE}.blender.preferences.SHLIGHT_AddonPreferences" in during_classes
+    assert f"{MODULE}.blender.data.preferences.SHLIGHT_AddonPreferences" in during_classes
     assert all(name.startswith(MODULE + ".") for name in during_classes), during_classes
 
     # Disabled cleanly: nothing registered by the add-on is left behind.

@@ -3,7 +3,7 @@
 import bpy
 
 # "bl_ext.user_default.sh_lighting" when installed as an extension, "sh_lighting" in tests.
-ADDON_ID = __package__.rpartition(".")[0]
+ADDON_ID = __package__.rpartition(".blender")[0]
 
 
 def addon_preferences():
