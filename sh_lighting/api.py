@@ -60,7 +60,7 @@ from .formats.presets import PresetError
 
 # What the command line (sh_lighting.cli) uses of the Blender layer, through here only.
 from .blender.data.compat import eevee_engine_id
-from .blender.data.scene_data import has_coefficients, last_note
+from .blender.data.scene_data import has_coefficients
 from .blender.data.scene_data import validate as validate_coefficients
 from .blender.presets.preset_io import (
     export_coefficients,
@@ -93,7 +93,7 @@ __all__ = [
     "flip_vertical", "apply_window", "split_sun", "describe", "negative_warning",
     "extract_lights",
     # for the command line
-    "eevee_engine_id", "has_coefficients", "last_note", "validate_coefficients",
+    "eevee_engine_id", "has_coefficients", "validate_coefficients",
     "export_coefficients", "read_preset_file", "scene_metadata", "world_environment",
     "materials_of", "objects_without_material", "shared_scene_notes", "HDRI_ERROR_NORMALS",
     "hdri_lights", "hdri_metadata", "read_hdri",
@@ -232,9 +232,9 @@ def set_coefficients(scene, coeffs, provenance=None, animation="KEY"):
     ``animation``: when a property written is keyframed or driven, "KEY" (default) keys the
     new value at the current frame (a driven one is refused: ``AnimatedError`` naming it),
     "CLEAR" removes its animation first, "REFUSE" raises ``AnimatedError``
-    (``blender.scene_data``); what was done: ``scene_data.last_note()``.
-    The scene is tagged, so open viewports show the new values at once, and materials that
-    SH Lighting was applied to follow at the next render. Returns the stored float64 copy.
+    (``blender.scene_data``). The scene is tagged, so open viewports show the new values at
+    once, and materials that SH Lighting was applied to follow at the next render. Returns the
+    stored float64 copy; its ``note`` says what was done about animation ("" if nothing).
     """
     return _scene_data.store(scene, coeffs, provenance or {"source": "SCRIPT"}, animation)
 

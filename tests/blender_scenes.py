@@ -224,6 +224,7 @@ class Recorder:
 def run_execute(cls, **props):
     """``cls.execute`` on a ``Recorder`` with ``props``: (result, [(kinds, message)])."""
     recorder = Recorder(**props)
-    if hasattr(cls, "apply"):  # design operators split execute and apply
+    if hasattr(cls, "apply"):  # design operators split execute, apply and message
         recorder.apply = lambda scene: cls.apply(recorder, scene)
+        recorder.message = lambda result: cls.message(recorder, result)
     return cls.execute(recorder, bpy.context), recorder.reports

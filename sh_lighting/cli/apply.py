@@ -58,13 +58,12 @@ def apply_and_save(args, preset, out):
     scene = pick_scene(args.scene)
     objects = objects_to_apply(scene, args.objects)
     try:  # what the UI's Load and Import do (the preset's name recorded from its metadata)
-        api.import_preset(scene, preset, args.animation.upper())
+        note = api.import_preset(scene, preset, args.animation.upper()).note
     except (PresetError, OSError) as error:
         raise CommandError(str(error)) from None
     except api.AnimatedError as error:
         raise CommandError(str(error).replace("(animation='KEY', ", "(")
                            .replace("(animation='CLEAR', ", "(")) from None
-    note = api.last_note()
     if note:
         say(f"SH lighting {note}")
     result = api.apply_to_materials(api.materials_of(objects), scene, args.mode)

@@ -14,6 +14,8 @@ import bpy
 COMMAND = "sh_lighting"
 classes = ()  # no Blender classes: the command is registered by its id
 
+# Blender returns a handle from register_cli_command and needs it back to unregister: the
+# module holds it from register() to unregister() (empty otherwise).
 _handles = []
 
 

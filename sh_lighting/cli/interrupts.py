@@ -15,6 +15,8 @@ import threading
 from contextlib import contextmanager
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
+# The signal that stopped the command: a signal handler has no caller to return it to, and
+# signals belong to the process, so the process's one record of it lives here.
 _received = []
 
 

@@ -145,6 +145,7 @@ def _stacked_column_weights(width, max_order):
     return weights
 
 
+# Thread pools are the process's workers, started once per size and kept (no lighting data).
 _POOLS = {}
 
 

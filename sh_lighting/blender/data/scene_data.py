@@ -39,8 +39,9 @@ scene's action or of its NLA strips, or a driver, on ``scene["sh_..."]``):
 * "REFUSE" (the command line's default): an ``AnimatedError`` naming the property, nothing
   changed.
 
-``last_note()`` says what the last ``store`` did about animation ("keyed at frame 12
-because sh_L10_gain is animated"), for the operators' reports. ``store(..., gains="KEEP")``
+``store`` returns the values it wrote as a ``Stored`` array whose ``note`` says what it did
+about animation ("keyed at frame 12 because sh_L10_gain is animated"; "" if nothing), for
+the operators' reports. ``store(..., gains="KEEP")``
 (the design edits, when a gain is animated) writes the channels c only and leaves the gains
 and their animation alone: L = s(t) · c' at every frame.
 """
@@ -76,7 +77,18 @@ PRECISION = 4
 DEFAULT_ANIMATION = "KEY"
 GAIN_POLICIES = ("UNIT", "KEEP")
 
-_last_note = ""
+
+class Stored(np.ndarray):
+    """The (9, 3) float64 values ``store`` wrote (a plain array otherwise), with ``note``: what
+    it did about animated properties, a sentence ("" if nothing)."""
+
+    note = ""
+
+
+def _stored(values, note):
+    stored = np.array(values, dtype=np.float64).view(Stored)
+    stored.note = note
+    return stored
 
 
 def has_coefficients(scene):
@@ -246,17 +258,6 @@ def gains_animated(scene):
     return bool(animated(scene, GAIN_NAMES))
 
 
-def last_note():
-    """What the last ``store`` did about animated properties, a sentence ("" if nothing)."""
-    return _last_note
-
-
-def forget_note():
-    """Clear ``last_note`` (before a writer that may not store at all)."""
-    global _last_note
-    _last_note = ""
-
-
 def add_missing_gains(scene):
     """Gains s = 1 for the coefficients of ``scene`` that have none (files from before the
     gains render as before), with their UI data and a tag; returns the names written."""
@@ -279,19 +280,19 @@ def store(scene, coeffs, provenance, animation=DEFAULT_ANIMATION, gains="UNIT"):
     (``coeffs`` are then c, the lighting s · c). Validates first (ValueError, nothing
     changed), then writes, keys or clears, records, sets the UI data, tags the scene for the
     depsgraph (the viewports and the next render see the new values) and redraws the panels.
-    Returns the stored float64 copy.
+    Returns the stored float64 copy, a ``Stored`` whose ``note`` says what was done about
+    animated properties.
     """
-    global _last_note
     c = validate(coeffs)
     record = _check_provenance(provenance)
     if gains not in GAIN_POLICIES:
         raise ValueError(f"gains must be one of {', '.join(GAIN_POLICIES)}, got {gains!r}")
     written = PROPERTY_NAMES + (GAIN_NAMES if gains == "UNIT" else ())
     found = check_animation(scene, written, animation)
-    _last_note = ""
+    note = ""
     if found and animation == "CLEAR":
         clear_animation(scene, found)
-        _last_note = f"animation of {', '.join(sorted(found))} removed"
+        note = f"animation of {', '.join(sorted(found))} removed"
     for name, gain_name, rgb in zip(PROPERTY_NAMES, GAIN_NAMES, c):
         scene[name] = [float(v) for v in rgb]
         if gains == "UNIT":
@@ -300,7 +301,7 @@ def store(scene, coeffs, provenance, animation=DEFAULT_ANIMATION, gains="UNIT"):
         frame = scene.frame_current
         for name in found:
             scene.keyframe_insert(f'["{name}"]', frame=frame)
-        _last_note = f"keyed at frame {frame} because {listed(found)} animated"
+        note = f"keyed at frame {frame} because {listed(found)} animated"
     if record["source"] == "WORLD" and "edit" not in record:
         scene[COMPUTED_PROPERTY] = [float(v) for v in c.ravel()]
         scene[COMPUTED_PROVENANCE_PROPERTY] = record
@@ -308,7 +309,7 @@ def store(scene, coeffs, provenance, animation=DEFAULT_ANIMATION, gains="UNIT"):
     ensure_ui(scene)
     scene.update_tag()
     redraw()
-    return c if gains == "UNIT" else get_coefficients(scene)
+    return _stored(c if gains == "UNIT" else get_coefficients(scene), note)
 
 
 def reset(scene):

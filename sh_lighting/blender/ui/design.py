@@ -25,7 +25,9 @@ BASIS_SCALE = 3.0  # largest icon size, in UI units; smaller when 5 do not fit t
 
 
 class _Edit:
-    """Mixin: runs ``self.apply(scene)``; design errors become an ERROR report, nothing changed."""
+    """Mixin: runs ``self.apply(scene)`` (the edit's stored values) and reports
+    ``self.message(result)`` with the store's note; design errors become an ERROR report,
+    nothing changed."""
 
     bl_options = {"REGISTER", "UNDO"}
 
@@ -33,15 +35,18 @@ class _Edit:
     def poll(cls, context):
         return coefficients_poll(cls, context)
 
+    def message(self, result):
+        return ""
+
     def execute(self, context):
-        scene_data.forget_note()
         try:
-            message = self.apply(context.scene)
+            result = self.apply(context.scene)
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        note = scene_data.last_note()  # a key written over an animated value, if any
-        message = "; ".join(part for part in (message, note and f"SH lighting {note}") if part)
+        note = getattr(result, "coefficients", result).note  # a key over an animated value
+        parts = (self.message(result), note and f"SH lighting {note}")
+        message = "; ".join(part for part in parts if part)
         if message:
             self.report({"INFO"}, message)
         return {"FINISHED"}
@@ -75,7 +80,7 @@ class SHLIGHT_OT_rotate(_Live, _Edit, bpy.types.Operator):
     )
 
     def apply(self, scene):
-        edits.rotate(scene, self.yaw, self.pitch, self.roll)
+        return edits.rotate(scene, self.yaw, self.pitch, self.roll)
 
 
 def mapping_problem(context):
@@ -112,7 +117,9 @@ class SHLIGHT_OT_match_mapping(_Edit, bpy.types.Operator):
         return True
 
     def apply(self, scene):
-        edits.match_mapping(scene)
+        return edits.match_mapping(scene)
+
+    def message(self, result):
         return "SH lighting rotated by the world's Mapping node rotation"
 
 
@@ -128,7 +135,7 @@ class SHLIGHT_OT_exposure(_Live, _Edit, bpy.types.Operator):
     )
 
     def apply(self, scene):
-        edits.exposure(scene, self.stops)
+        return edits.exposure(scene, self.stops)
 
 
 class SHLIGHT_OT_saturation(_Live, _Edit, bpy.types.Operator):
@@ -157,7 +164,7 @@ class SHLIGHT_OT_saturation(_Live, _Edit, bpy.types.Operator):
     )
 
     def apply(self, scene):
-        edits.saturation(scene, self.amount, self.band)
+        return edits.saturation(scene, self.amount, self.band)
 
 
 class SHLIGHT_OT_band_gains(_Live, _Edit, bpy.types.Operator):
@@ -181,7 +188,7 @@ class SHLIGHT_OT_band_gains(_Live, _Edit, bpy.types.Operator):
     )
 
     def apply(self, scene):
-        edits.band_gains(scene, self.ambient, self.directional, self.quadratic)
+        return edits.band_gains(scene, self.ambient, self.directional, self.quadratic)
 
 
 class SHLIGHT_OT_flip_vertical(_Edit, bpy.types.Operator):
@@ -191,7 +198,7 @@ class SHLIGHT_OT_flip_vertical(_Edit, bpy.types.Operator):
     bl_label = "Lit from Below"
 
     def apply(self, scene):
-        edits.flip_vertical(scene)
+        return edits.flip_vertical(scene)
 
 
 class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
@@ -241,7 +248,10 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
         row.prop(self, "width")
 
     def apply(self, scene):
-        return window_report(edits.apply_window(scene, self.kind, self.width))
+        return edits.apply_window(scene, self.kind, self.width)
+
+    def message(self, result):
+        return window_report(result)
 
 
 def window_report(result):

@@ -54,10 +54,10 @@ def _target_poll(cls, context):
     return True
 
 
-def with_note(message):
-    """``message`` and, when the write keyed or cleared animated values, what it did."""
-    note = scene_data.last_note()
-    return f"{message}; {note}" if note else message
+def with_note(message, stored):
+    """``message`` and, when the write of ``stored`` keyed or cleared animated values, what
+    it did (``scene_data.Stored.note``)."""
+    return f"{message}; {stored.note}" if stored.note else message
 
 
 class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
@@ -82,7 +82,7 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
         if workspace is not None:
             workspace.status_text_set("Computing the lighting of the world…")
         try:
-            _coeffs, info = design_compute.compute_from_world(
+            stored, info = design_compute.compute_from_world(
                 context.scene, error_normals=compute.REPORT_ERROR_NORMALS)
         except ValueError as error:  # WorldError and invalid coefficients
             self.report({"ERROR"}, str(error))
@@ -92,7 +92,7 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
             wm.progress_end()
             if workspace is not None:
                 workspace.status_text_set(None)
-        self.report({"INFO"}, with_note(compute.report(info, time.perf_counter() - start)))
+        self.report({"INFO"}, with_note(compute.report(info, time.perf_counter() - start), stored))
         return {"FINISHED"}
 
 
@@ -114,11 +114,12 @@ class SHLIGHT_OT_reset(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            scene_data.reset(context.scene)
+            stored = scene_data.reset(context.scene)
         except (LookupError, TypeError, ValueError) as error:
             self.report({"ERROR"}, f"Cannot reset: {error}")
             return {"CANCELLED"}
-        self.report({"INFO"}, with_note("SH lighting reset to the values computed from the world"))
+        self.report({"INFO"}, with_note("SH lighting reset to the values computed from the world",
+                                        stored))
         return {"FINISHED"}
 
 

@@ -83,11 +83,10 @@ def load_preset_file(operator, scene, path):
         operator.report({"ERROR"}, "No preset file given")
         return {"CANCELLED"}
     try:
-        preset_io.import_preset(scene, path)
+        note = preset_io.import_preset(scene, path).note
     except (PresetError, OSError, ValueError) as error:
         operator.report({"ERROR"}, f"Preset not loaded, nothing changed: {error}")
         return {"CANCELLED"}
-    note = scene_data.last_note()
     operator.report({"INFO"}, f"Loaded SH lighting preset '{loaded_name(path)}'"
                     + (f"; {note}" if note else ""))
     return {"FINISHED"}

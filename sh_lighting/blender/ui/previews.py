@@ -33,9 +33,11 @@ BASIS_NAMES = tuple(f"basis_{k}" for k in range(9))
 IRRADIANCE_NAME = "irradiance"
 SWATCH_SIZE = 16
 
-# The collection, the signature of the irradiance image it holds and that image's exposure,
-# and the swatches' signatures.
-_state = {"collection": None, "signature": None, "stops": 0.0, "swatches": {}}
+# Blender's previews live in a collection that the add-on must hold from register() to
+# unregister() (bpy.utils.previews), so the module keeps that one reference; what the
+# collection's images were drawn from (``signature``, ``stops``, ``swatches``) are attributes
+# of the collection itself and go with it.
+_held = {"collection": None}
 
 
 def to_preview(preview, rgba):
@@ -59,7 +61,7 @@ def from_preview(preview):
 
 def collection():
     """The open previews collection, or a RuntimeError when the add-on is not registered."""
-    pcoll = _state["collection"]
+    pcoll = _held["collection"]
     if pcoll is None:
         raise RuntimeError("SH Lighting previews are not available: the add-on is not registered")
     return pcoll
@@ -87,14 +89,14 @@ def irradiance(coeffs):
     pcoll = collection()
     preview = pcoll.get(IRRADIANCE_NAME) or pcoll.new(IRRADIANCE_NAME)
     key = signature(coeffs)
-    if key != _state["signature"]:
+    if key != pcoll.signature:
         stops = fit_exposure(coeffs, IRRADIANCE_SIZE)
         image = irradiance_sphere_image(
             coeffs, IRRADIANCE_SIZE, exposure=stops, show_negative=True
         )
         to_preview(preview, image)
-        _state["signature"], _state["stops"] = key, stops
-    return preview, _state["stops"]
+        pcoll.signature, pcoll.stops = key, stops
+    return preview, pcoll.stops
 
 
 def swatch_colour(rgb):
@@ -116,29 +118,26 @@ def swatch(index, rgb):
     preview = pcoll.get(name) or pcoll.new(name)
     colour = swatch_colour(rgb)
     key = tuple(np.round(colour * 255.0).astype(int))
-    if _state["swatches"].get(index) != key:
+    if pcoll.swatches.get(index) != key:
         image = np.ones((SWATCH_SIZE, SWATCH_SIZE, 4))
         image[..., :3] = colour
         to_preview(preview, image)
-        _state["swatches"][index] = key
+        pcoll.swatches[index] = key
     return preview
 
 
 def register():
-    if _state["collection"] is not None:  # registered twice without unregister: start clean
+    if _held["collection"] is not None:  # registered twice without unregister: start clean
         unregister()
     pcoll = bpy.utils.previews.new()
     for name, image in zip(BASIS_NAMES, basis_sphere_images(BASIS_SIZE), strict=True):
         to_preview(pcoll.new(name), image)
-    _state["collection"] = pcoll
-    _state["signature"] = None
-    _state["swatches"] = {}
+    pcoll.signature, pcoll.stops, pcoll.swatches = None, 0.0, {}
+    _held["collection"] = pcoll
 
 
 def unregister():
-    pcoll = _state["collection"]
-    _state["collection"] = None
-    _state["signature"] = None
-    _state["swatches"] = {}
+    pcoll = _held["collection"]
+    _held["collection"] = None
     if pcoll is not None:
         bpy.utils.previews.remove(pcoll)

@@ -47,8 +47,8 @@ def test_store_over_a_keyed_gain_keys_it_at_the_current_frame(addon):
     scene = keyed_gain_scene()
     new = BASE.copy()
     new[0] = 4.0
-    api.set_coefficients(scene, new)
-    assert scene_data.last_note() == "keyed at frame 1 because sh_L00_gain is animated"
+    stored = api.set_coefficients(scene, new)
+    assert stored.note == "keyed at frame 1 because sh_L00_gain is animated"
     assert_allclose(rendered(scene, 1), new)  # the old code rendered L00 = 2 here
     later = new.copy()
     later[0] *= 2.0  # the gain's key at frame 10 is kept, the channel is not animated
@@ -62,8 +62,8 @@ def test_store_refuses_or_clears_when_asked(addon):
                        match=r"^sh_L00_gain is animated \(keyframed\).*nothing stored"):
         scene_data.store(scene, new, {"source": "SCRIPT"}, animation="REFUSE")
     assert_allclose(rendered(scene, 1)[0], 0.5 * BASE[0])
-    scene_data.store(scene, new, {"source": "SCRIPT"}, animation="CLEAR")
-    assert scene_data.last_note() == "animation of sh_L00_gain removed"
+    stored = scene_data.store(scene, new, {"source": "SCRIPT"}, animation="CLEAR")
+    assert stored.note == "animation of sh_L00_gain removed"
     assert scene_data.animated(scene) == {}
     for frame in (1, 10):
         assert_allclose(rendered(scene, frame), new)
@@ -132,9 +132,14 @@ def test_loading_a_preset_over_a_keyed_channel_and_gain(addon, tmp_path):
     key(scene, "sh_L00_gain", 1, 0.5)
     key(scene, "sh_L00_gain", 10, 0.5)
     scene.frame_set(10)
-    assert bpy.ops.shlight.load_preset(filepath=str(path)) == {"FINISHED"}
-    assert scene_data.last_note() == (
-        "keyed at frame 10 because sh_L00, sh_L00_gain are animated")
+    from blender_scenes import Recorder
+
+    from sh_lighting.blender.ui.presets import load_preset_file
+
+    recorder = Recorder()
+    assert load_preset_file(recorder, scene, str(path)) == {"FINISHED"}
+    loaded = "Loaded SH lighting preset 'p'; keyed at frame 10 because sh_L00, sh_L00_gain are"
+    assert recorder.reports == [({"INFO"}, loaded + " animated")]
     assert_allclose(rendered(scene, 10), preset, rtol=1e-6)  # the old code: 1.5 × preset
     first = preset.copy()
     first[0] = 0.5  # frame 1's keys are kept
@@ -179,6 +184,7 @@ def test_cli_apply_over_a_keyed_gain_refuses_by_default_keys_or_clears(tmp_path)
 
 def test_the_design_operators_report_the_key_they_wrote(addon):
     from blender_scenes import run_execute
+
     from sh_lighting.blender.ui import design as design_ui
 
     scene = bpy.context.scene
@@ -197,7 +203,12 @@ def test_reset_over_a_keyed_gain_keys_it_and_says_so(addon):
     api.exposure(scene, 1.0)
     key(scene, "sh_L11_gain", 3, 0.25)
     scene.frame_set(3)
-    assert bpy.ops.shlight.reset() == {"FINISHED"}
-    assert scene_data.last_note() == "keyed at frame 3 because sh_L11_gain is animated"
+    from blender_scenes import run_execute
+
+    from sh_lighting.blender.ui.operators import SHLIGHT_OT_reset
+
+    assert run_execute(SHLIGHT_OT_reset) == ({"FINISHED"}, [({"INFO"}, (
+        "SH lighting reset to the values computed from the world; keyed at frame 3 because "
+        "sh_L11_gain is animated"))])
     for frame in (3, 8):  # one key: the Reset value renders at every frame
         assert_allclose(rendered(scene, frame), BASE)
