@@ -199,7 +199,7 @@ def _prior_rows(rows):
 
 def section(noise, priors, both, seconds):
     load = os.getloadavg()[0]
-    lines = [BEGIN, "## Light from a photograph (Match Photo, issue 25)", "",
+    lines = [BEGIN, "## Light from a photograph (Match Photo)", "",
              f"Measured by `python -m benchmarks.bench_photo` (load average {load:.1f}; one "
              f"{SIZE} px, {SAMPLES} spp Cycles render took {seconds:.1f} s). Errors: RMS of "
              "E(n) over normals and channels / its mean. Tests: tests/blender/photo/test_photo.py "
@@ -221,7 +221,7 @@ def section(noise, priors, both, seconds):
     lines += ["", "![Match Photo's error against added noise](photo_error.png)", "",
               "**Courtyard (bundled), 8-bit sRGB PNG, 85 mm: per prior.** Seen: up to one "
               "scale, against the world's true irradiance (eq. 1) on the seen normals; the "
-              "limit is the best nine-term fit there (the issue's bound: 1.25× it).", ""]
+              "limit is the best nine-term fit there (the goal: 1.25× it).", ""]
     lines += _prior_rows(priors)
     fit = priors["none"][3]
     lines += ["", f"Poorly constrained by one photo (σ/σ_max < 0.1): {', '.join(fit.weak_terms)}"

@@ -2,7 +2,7 @@
 
 These machines are noisy and their speed drifts, so the two are timed in alternation, pair by
 pair, and the median of the per-pair ratios is reported: `pixels.sum()` over the same float32
-RGBA array is the yardstick. Targets (issues 2 and 24): at most 3.0× at 1024×512 and 2.0× at
+RGBA array is the yardstick. Targets: at most 3.0× at 1024×512 and 2.0× at
 4096×2048, with float64 accumulation and exactness kept; a 256×128 map (a procedural world's
 capture, a design preview) in under 0.3 ms, where a call's fixed cost is most of the time.
 """

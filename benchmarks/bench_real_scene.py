@@ -1,4 +1,4 @@
-"""`python -m benchmarks.bench_real_scene`: every Apply mode in a real scene (issue 21 item 3).
+"""`python -m benchmarks.bench_real_scene`: every Apply mode in a real scene.
 
 A scene of our own: a 40 m ground plane, a box and a Suzanne (diffuse, base 0.8, roughness
 0.5), a glossy sphere (metallic 0.8, roughness 0.5), a camera looking down at them, under two
@@ -13,7 +13,7 @@ render is compared with Cycles path tracing of the original world (``REFERENCE_S
 * time: the render's wall time (the machine is shared: see the load average).
 
 The section between the markers in benchmarks/REPORT.md is replaced (appended the first time).
-``METHODS`` is a list: another mode is one more entry. ``TRANSFER_METHODS`` (issue 22) bake
+``METHODS`` is a list: another mode is one more entry. ``TRANSFER_METHODS`` bake
 the transfer of all four objects once per HDRI (Cycles, ``TRANSFER_SAMPLES``; the ground is a
 grid, fine near the objects, so that the per-corner transfer can hold their shadows) and
 render it, with and without Extract Lights; the EEVEE frame time of Blender's own world
@@ -48,7 +48,7 @@ HDRIS = ("sunrise", "forest")
 REFERENCE_SAMPLES = 512
 EEVEE_SAMPLES = 16
 TRANSFER_SAMPLES = 64  # the bake's default: E noise about 1.4 % per corner (REPORT.md)
-LIGHTS = 2  # Extract Lights' count, as in issue 21's table
+LIGHTS = 2  # Extract Lights' count, as in the Apply modes' table
 
 
 def _principled(name, **inputs):
@@ -315,7 +315,7 @@ def _warm_eevee_times(scene, objects, folder, hdri, lights):
 
 
 def section(results, size, load, elapsed, notes=None):
-    lines = [BEGIN, "", "## Real scene: every Apply mode against path tracing (issue 21)", "",
+    lines = [BEGIN, "", "## Real scene: every Apply mode against path tracing", "",
              f"`python -m benchmarks.bench_real_scene` ({size}×{size} px, reference: Cycles "
              f"path tracing of the world at {REFERENCE_SAMPLES} spp, max 4 bounces; load "
              f"average {load}; {elapsed:.0f} s in all). Ground 40 m, a box and a Suzanne "

@@ -1,4 +1,4 @@
-"""Transfer (issue 22): bake error against bake samples, bake seconds per 10k vertices, and
+"""Transfer: bake error against bake samples, bake seconds per 10k vertices, and
 Cycles at equal error (transfer at 1 sample against path tracing). Prints a Markdown section
 for benchmarks/REPORT.md. Run: ``python -m benchmarks.bench_transfer [--eevee]``, or
 ``--equal-error [--size N]`` for the equal-error comparison alone (160 px by default).
@@ -59,7 +59,7 @@ def corner_irradiance(objects):
 
 
 def main(eevee=False):
-    lines = ["## Transfer (precomputed radiance transfer, issue 22)", ""]
+    lines = ["## Transfer (precomputed radiance transfer)", ""]
     lines.append(f"`python -m benchmarks.bench_transfer`, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
                  f"load average at start {load()} (2 cores, shared: times are inflated).")
     lines.append("Scene: 4 m ground (24 × 24 quads) and a 1 m box (6 × 6 quads per face), grey "

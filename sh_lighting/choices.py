@@ -10,7 +10,7 @@ from typing import NamedTuple
 class Format(NamedTuple):
     """An export format: its label, file extension, the ending of its default file name
     (after the .blend's name; each format its own, so that exporting one never proposes the
-    file of another, issue 23 item 3) and what it holds (the Export operator's tooltips)."""
+    file of another) and what it holds (the Export operator's tooltips)."""
 
     label: str
     extension: str

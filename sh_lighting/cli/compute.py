@@ -120,7 +120,7 @@ def run(args):
 
 def how_read(source, hdri, given):
     """"HDRI path (W x H, read as ...)", and for a square image read as equirect without a
-    --projection, what else it may be (a mirror ball) and how to say so (issue 20 item 14)."""
+    --projection, what else it may be (a mirror ball) and how to say so."""
     height, width = hdri.pixels.shape[:2]
     if hdri.projection == "mirror_ball":
         return f"HDRI {source} ({width}x{height}, read as a mirror ball)"

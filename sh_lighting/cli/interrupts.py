@@ -3,8 +3,8 @@ and it exits with 128 + the signal's number (130, 143) after one line, ``sh_ligh
 interrupted``.
 
 Importing bpy installs Blender's own SIGINT handler, which only notes the key press: a Ctrl+C
-during Blender's start was swallowed and the command went on to replace its output (issue 20
-item 3). So the handlers are installed before anything else, the two signals are held
+during Blender's start was swallowed and the command went on to replace its output.
+So the handlers are installed before anything else, the two signals are held
 (blocked, not lost) while bpy loads and our handlers are installed again before they are let
 through, and ``check`` is called before each final move into place, in case the signal was
 taken while Blender ran Python code of its own that ignores exceptions.

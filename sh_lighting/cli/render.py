@@ -124,7 +124,7 @@ def frame_target(scene, output, frame):
 def check_lighting(scene, frame):
     """A CommandError naming the coefficient or gain that is not a valid number at ``frame``
     as the render evaluates it (keyed to NaN, driven beyond float32, text...), which would
-    render black (issue 20 item 13); nothing when the scene has no coefficients."""
+    render black; nothing when the scene has no coefficients."""
     import bpy
 
     from .. import api

@@ -1,4 +1,4 @@
-"""The world's glossy reflection as a few prefiltered maps plus a split-sum factor (issue 21).
+"""The world's glossy reflection as a few prefiltered maps plus a split-sum factor.
 
 In EEVEE, Keep BSDF hides the world from EEVEE's own lighting (its one world capture serves
 diffuse and glossy alike), so the diffuse light comes from the nine SH terms alone. The glossy

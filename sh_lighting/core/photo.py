@@ -61,7 +61,7 @@ DEFAULT_PRIOR_WEIGHT = 1.0  # the most: as much as all the pixels together
 MIN_RADIUS = 4.0  # pixels: below it the ball has too few pixels for nine terms
 MIN_PIXELS = 30  # used pixels: a few per unknown
 # A matte ball's picture is within a few % of the best nine-term picture (3.1 % under a
-# sunlit window probe, measured in the issue); above this, it is not a diffuse ball's.
+# sunlit window probe, measured); above this, it is not a diffuse ball's.
 MAX_RESIDUAL = 0.1
 # ... and the nine terms explain less than half of how the pixels vary: a ball under a single
 # hard sun has a larger residual (38 % of its mean, the terminator) but the nine terms
@@ -72,7 +72,7 @@ WEAK_LOADING = 0.3  # |component| of such a singular vector that names a term
 PRIOR_NORMALS = 400  # lattice normals the prior may be placed on (``sh.spread_normals``)
 # The prior may move the seen picture by this fraction of the nine-term misfit (RMS; at least
 # RESIDUAL_FLOOR of the mean): the seen side's error then grows by at most ~6 % (the change is
-# orthogonal to the residual, √(1 + 0.35²) = 1.06), within the issue's 1.25× even when the
+# orthogonal to the residual, √(1 + 0.35²) = 1.06), within the goal of 1.25× even when the
 # misfit is overestimated twice (noise the second differences miss).
 PRIOR_HEADROOM = 0.35
 # A measured prior (a chrome ball, a second photo) is data about the unseen side, not a
@@ -430,7 +430,7 @@ def scaled_error(estimate, reference):
 class ExposureMatch:
     """The grey ball calibrated to the chrome ball.
 
-    scale: × grey L_lm gives the chrome ball's L00 (luminance): the issue's calibration.
+    scale: × grey L_lm gives the chrome ball's L00 (luminance): the L00 calibration.
     seen_scale: × grey E(n) best matches the chrome ball's on the grey ball's seen normals
         (least squares, luminance): better conditioned, since one photo fixes L00 poorly
         (it trades with the moment along the view axis, ``PhotoFit.weak_terms``).

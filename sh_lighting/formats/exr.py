@@ -1,7 +1,7 @@
 """An OpenEXR file's structure checked before Blender reads it (no bpy, no numpy).
 
 bpy 5.0.1's EXR reader crashes the process (SIGSEGV) on a file whose chunks are cut short,
-as an interrupted copy or download leaves it (issue 20 item 16): ``check_exr`` reads the
+as an interrupted copy or download leaves it: ``check_exr`` reads the
 header (magic number, version flags, attributes), the chunk offset table, and each chunk's
 own header, and raises a ValueError of one line when something lies outside the file.
 

@@ -171,7 +171,7 @@ def test_the_next_capture_removes_a_killed_captures_folder(addon):
 
 
 def test_a_driven_strength_is_read_as_the_next_render_shows_it(addon, tmp_path):
-    """Issue 20 item 15: Strength driven by scene["k"]; a render, then scene["k"] set from
+    """Strength driven by scene["k"]; a render, then scene["k"] set from
     Python and view_layer.update(): Compute read the old Strength (1 instead of 3)."""
     scene = bpy.context.scene
     world = bpy.data.worlds.new("Driven")
@@ -220,7 +220,7 @@ BAD_PROPERTIES = [
 @pytest.mark.parametrize("name, value, message", BAD_PROPERTIES)
 def test_a_bad_custom_property_is_named_by_panel_api_and_export_and_repaired(
         addon, tmp_path, name, value, message):
-    """Issue 20 item 17: the panel's draw raised on every redraw, API and export gave raw
+    """The panel's draw raised on every redraw, API and export gave raw
     numpy errors."""
     from sh_lighting.blender.data import scene_data
     from sh_lighting.blender.ui import design as design_ui
@@ -277,7 +277,7 @@ def _bad_gain_blend(tmp_path, how):
     ("text", r"scene\['sh_L00_gain'\] is a string \('abc'\), not a number"),
 ])
 def test_render_names_a_bad_gain_instead_of_rendering_black(tmp_path, how, message):
-    """Issue 20 item 13: these rendered black with exit status 0."""
+    """These rendered black with exit status 0."""
     from cli_runs import run
 
     blend = _bad_gain_blend(tmp_path, how)
@@ -304,7 +304,7 @@ def test_render_names_a_bad_gain_instead_of_rendering_black(tmp_path, how, messa
     (lambda s: api.band_gains(s, quadratic=float("inf")), r"^quadratic is inf, not a finite"),
 ])
 def test_design_api_arguments_are_one_clear_line_and_change_nothing(addon, call, message):
-    """Issue 20 item 18: raw TypeErrors for strings and None, RuntimeWarnings for inf."""
+    """Raw TypeErrors for strings and None, RuntimeWarnings for inf."""
     import warnings
 
     scene = bpy.context.scene

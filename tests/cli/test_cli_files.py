@@ -1,4 +1,4 @@
-"""The user's files under the command line (issue 12): nothing lost, never an output over an
+"""The user's files under the command line: nothing lost, never an output over an
 input, ``//`` paths, permissions and links kept, leftovers of a kill removed, one clear line
 for every bad path. Each command runs in its own process with a temporary HOME and Blender
 user folder (``cli_runs.run``)."""
@@ -398,7 +398,7 @@ def _gltf_specular_levels(path):
 
 @pytest.mark.parametrize("height, width", [(1, 1), (8, 1)])
 def test_gltf_export_of_a_map_one_texel_wide_lights_the_whole_cube(tmp_path, height, width):
-    """Issue 20 item 10: specular levels 1-3 were black on about half the cube (0/0 -> NaN
+    """Specular levels 1-3 were black on about half the cube (0/0 -> NaN
     -> 0) with a numpy RuntimeWarning, exit 0. A constant map prefilters to itself."""
     hdri = write_exr(tmp_path / "thin.exr", constant_pixels(SKY, height=height, width=width))
     out = tmp_path / "thin.gltf"
@@ -418,7 +418,7 @@ def test_gltf_export_of_a_map_one_texel_wide_lights_the_whole_cube(tmp_path, hei
     ("--files", "3-4"),  # beyond the folder
 ])
 def test_a_batch_refused_before_any_work_creates_no_folder(tmp_path, refusal):
-    """Issue 20 item 24: OUT_DIR and its parents were created before the refusal."""
+    """OUT_DIR and its parents were created before the refusal."""
     hdris = tmp_path / "hdris"
     hdris.mkdir()
     write_exr(hdris / "a.exr", constant_pixels((1.0, 1.0, 1.0)))
@@ -428,7 +428,7 @@ def test_a_batch_refused_before_any_work_creates_no_folder(tmp_path, refusal):
 
 
 def test_compute_of_a_blend_takes_nonfinite_zero_and_names_the_option(tmp_path):
-    """Issue 20 item 21: --nonfinite was ignored for a .blend and the error said "pass
+    """--nonfinite was ignored for a .blend and the error said "pass
     nonfinite='zero'", which neither the command line nor the API accepted."""
     from cli_runs import build_blend
 
@@ -447,7 +447,7 @@ def test_compute_of_a_blend_takes_nonfinite_zero_and_names_the_option(tmp_path):
 
 
 def test_a_truncated_exr_is_one_error_line_and_the_batch_goes_on(tmp_path):
-    """Issue 20 item 16: bpy 5.0.1's EXR reader crashed the process (SIGSEGV) on an EXR cut
+    """The EXR reader of bpy 5.0.1 crashed the process (SIGSEGV) on an EXR cut
     short, and batch died after its first file with no summary."""
     hdris, out = tmp_path / "hdris", tmp_path / "presets"
     hdris.mkdir()
@@ -493,7 +493,7 @@ def test_apply_records_the_preset_as_the_ui_does(inputs, tmp_path):
 
 
 def test_a_blend_blender_cannot_open_is_said_once_in_one_line(tmp_path):
-    """Issue 20 item 23: our line embedded Blender's whole message ("Error: Loading ... failed:
+    """Our line embedded Blender's whole message ("Error: Loading ... failed:
     ...") and a blank line, and Blender printed the same message again."""
     bad = tmp_path / "bad.blend"
     bad.write_bytes(b"BLENDER-v600RENDH" + bytes(range(256)) * 8)
@@ -507,7 +507,7 @@ def test_a_blend_blender_cannot_open_is_said_once_in_one_line(tmp_path):
 
 
 def test_a_square_image_says_how_it_was_read_and_takes_a_projection(tmp_path):
-    """Issue 20 item 14: a square image was taken as equirect without a word."""
+    """A square image was taken as equirect without a word."""
     square = write_exr(tmp_path / "square64.exr", constant_pixels(SKY, height=64, width=64))
     result = run("compute", square)
     assert result.returncode == 0, result.stderr

@@ -1,4 +1,4 @@
-"""Interrupted and concurrent runs of the command line (issue 20 items 3 and 20): Ctrl+C or
+"""Interrupted and concurrent runs of the command line: Ctrl+C or
 SIGTERM at any moment exits non-zero and leaves the .blend as it was; two ``apply --in-place``
 on one file never break each other."""
 
@@ -77,7 +77,7 @@ def dead_pid():
 
 
 def test_apply_in_place_refuses_a_blend_another_run_is_changing(inputs, tmp_path):
-    """Issue 20 item 20: a second apply --in-place on the same file went ahead (and its
+    """A second apply --in-place on the same file went ahead (and its
     leftover cleanup deleted the first run's in-flight .blend@)."""
     import fcntl
 

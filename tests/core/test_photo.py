@@ -35,7 +35,7 @@ LIGHT = np.array(
 FRONT = camera_looking((0.0, 1.0, 0.0))  # from −Y towards +Y, z up: sees normals facing −Y
 SIZE, CIRCLE = 96, (48.0, 48.0, 44.0)
 EXACT = 1e-9  # float64 least squares on an exact nine-term picture: rounding only
-HEADROOM = 1.25  # the issue's bound: within 1.25× of the best nine-term fit, floor 0.5 %
+HEADROOM = 1.25  # the goal: within 1.25× of the best nine-term fit, floor 0.5 %
 
 
 def sunny_world(height=32, width=64):
@@ -141,7 +141,7 @@ BACK = camera_looking((0.0, -1.0, 0.0))  # the opposite side: from +Y towards �
 @pytest.mark.parametrize("prior", ["chrome", "photo"])
 def test_a_chrome_ball_or_a_second_photo_fills_the_unseen_side(prior):
     """Both measure the side one photo cannot see: over all normals the fit comes within ~1 %
-    of the world's nine terms (a guessed prior: 8-12 %), the seen side within the issue's
+    of the world's nine terms (a guessed prior: 8-12 %), the seen side within the goal,
     1.25× of the nine-term limit."""
     world = sunny_world()
     photo, exposure = sunny_photo(FRONT)

@@ -102,7 +102,7 @@ def test_irradiance_sphere_values_at_known_pixels():
 
 
 def test_fit_exposure_puts_the_brightest_pixel_at_white():
-    """Issue 23 item 6: the sphere is exposed to its own range. A constant sky of radiance c
+    """The sphere is exposed to its own range. A constant sky of radiance c
     shows c everywhere, so the fit is −log₂ of its largest channel; a light from above
     4× brighter is shown 2 stops lower with the same picture."""
     sky = constant([4.0, 2.0, 1.0])

@@ -172,7 +172,7 @@ def test_gltf_document_structure():
 
 @pytest.mark.parametrize("shape", [(1, 1), (8, 1), (1, 8), (2, 2)])
 def test_every_level_of_a_tiny_constant_map_is_the_constant(shape):
-    # Issue 20 item 10: with one texel column every texel centre faces +X, so directions facing
+    # With one texel column every texel centre faces +X, so directions facing
     # away saw no texel in their hemisphere: 0/0 -> NaN -> black on about half the cube.
     pixels = np.full((*shape, 3), 0.7)
     with np.errstate(all="raise"):  # a 0/0 is an error here, not a RuntimeWarning

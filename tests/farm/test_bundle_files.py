@@ -1,5 +1,5 @@
 """The bundles' own files, read without running a job: every parameter file names each
-parameter once, and only parameters its template defines (issue 20 item 25: the render
+parameter once, and only parameters its template defines (the render
 bundle listed ApplyMode twice; a farm takes one of the two and ignores the other)."""
 
 from pathlib import Path

@@ -204,7 +204,7 @@ def test_render_bundle_every_task(tmp_path, blender_command):
 
 
 def test_render_output_name_cannot_leave_the_output_folder(tmp_path, blender_command):
-    """Issue 20 item 22: OutputName=../escaped wrote its frames beside OutputFolder, exit 0."""
+    """OutputName=../escaped wrote its frames beside OutputFolder, exit 0."""
     job, blend, preset = render_job(tmp_path, blender_command)
     before = job.snapshot()
     params = job.params(BlendFile=str(blend), PresetFile=str(preset),

@@ -1,6 +1,6 @@
 """The user's files: replaced files keep mode, owner and links; leftovers of a kill are found;
 preset reading takes only small regular files and turns every decoding failure into one
-PresetError naming the file (issue 12)."""
+PresetError naming the file."""
 
 import errno
 import os
@@ -215,7 +215,7 @@ def _error_of(function, *args):
 
 
 def test_a_full_disk_names_the_file_it_could_not_write(tmp_path, monkeypatch):
-    """Issue 20 item 23: "[Errno 28] No space left on device", without the path."""
+    """Not "[Errno 28] No space left on device" without the path."""
     def full(fd):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 

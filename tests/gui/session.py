@@ -328,7 +328,7 @@ def world_lights_again(name):
     diffuse light on its BSDF: the diffuse weight · E(n)/π of the world's nine terms, within
     WORLD_LIT_TOLERANCE steps (the nine terms against the world itself, the Principled
     BSDF's view-dependent specular albedo and path-tracing noise; a viewport that kept the
-    world's diffuse light off stays some 50 steps darker, issue 23 item 1)."""
+    world's diffuse light off stays some 50 steps darker)."""
     scene = S()
     start = time.monotonic()
     while True:
@@ -675,7 +675,7 @@ def session():
     yield from viewport_follows("Frame 6 between keyframes: viewport follows")
 
     # Rendered, in the default Apply mode: a click on Apply with it, in EEVEE, then in Cycles;
-    # Remove and Apply again must reach the open Cycles viewport (issue 23 item 1).
+    # Remove and Apply again must reach the open Cycles viewport.
     set_apply_mode(default_apply_mode())
     yield from click(sidebar_point(*TARGETS["apply"]))
     yield from settle()

@@ -1,7 +1,7 @@
 """Writing over animated custom properties: the policy of ``scene_data.store``.
 
 A value written over a keyframed or driven property is what Blender shows until the next
-frame change, when the animation overrides it (issue 20 item 2). ``store`` asks
+frame change, when the animation overrides it. ``store`` asks
 ``check_animation`` which of the properties it writes are animated (an F-curve of the
 scene's action or of its NLA strips, or a driver) and what the policy allows
 (``ANIMATION_POLICIES``: "KEY" keys the new value at the current frame, a driven one refused;

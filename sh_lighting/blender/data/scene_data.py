@@ -24,7 +24,7 @@ A field edit or keyframe changes a property directly (Blender tags the scene its
 Python script writing ``scene["sh_L10"] = ...`` must call ``scene.update_tag()`` afterwards
 for open viewports to see it (a render always reads the current values).
 
-Animated properties (issue 20 item 2; the policy's checks are in ``animated``). A value written over a keyframed or driven property
+Animated properties (the policy's checks are in ``animated``). A value written over a keyframed or driven property
 is what Blender shows until the next frame change, when the animation overrides it: the
 write would be undone. So ``store`` looks at every property it writes and follows its
 ``animation`` policy (``ANIMATION_POLICIES``) when one is animated (an F-curve of the

@@ -48,8 +48,8 @@ MAX_STOPS = 256.0  # 2^±256 takes any float32 lighting out of range: no exposur
 
 
 def _number(value, what, hint):
-    """``value`` as a finite float, or a DesignError "what is ...: hint" (issue 20 item 18:
-    a string was a raw TypeError, inf a RuntimeWarning and NaN lighting)."""
+    """``value`` as a finite float, or a DesignError "what is ...: hint" (not a raw
+    TypeError for a string, a RuntimeWarning for inf, NaN lighting)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, Real):
         shown = type_name(value) if value is None else f"{type_name(value)} ({value!r})"
         raise DesignError(f"{what} is {shown}, not a number: {hint}")
@@ -65,8 +65,8 @@ def _number(value, what, hint):
 def _edited_values(scene):
     """(values an edit works on, ``store``'s gains policy). While a gain s_lm is keyframed or
     driven, the channels c_lm alone (the gains and their animation stay: L = s(t) · c' at
-    every frame; folding an animated gain into c would apply it twice at the next frame,
-    issue 23 item 2); else the lighting L = s · c, stored with s = 1. Exposure, saturation,
+    every frame; folding an animated gain into c would apply it twice at the next
+    frame); else the lighting L = s · c, stored with s = 1. Exposure, saturation,
     band gains, the flip and the windows scale whole rows, so they commute with the gains;
     a rotation mixes the rows of a band, so with unequal animated gains in a band the gains
     then scale the rotated rows."""

@@ -196,8 +196,8 @@ def world_environment(scene):
     working space) when its coefficients are exactly the ones computed from the world as it
     is now (``compute.world_match``) and it is an equirect image; None when they are not the
     world's (edited, loaded, a capture: the glTF specular cube then comes from the 9 terms).
-    A ValueError when they were computed from a world image that has changed since (issue
-    20 item 11: the cube would be the new image's, the coefficients the old one's).
+    A ValueError when they were computed from a world image that has changed since
+    (the cube would be the new image's, the coefficients the old one's).
     """
     match = world_match(scene)
     if match.stale:

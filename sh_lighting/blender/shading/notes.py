@@ -1,6 +1,6 @@
 """What Apply's mode does in the scene's render engine, and what goes wrong in this scene:
-the lines the panel shows under Apply and the notes Apply reports (issue 21 item 2, issue 23
-item 5). Whatever a mode cannot do is said where it matters, never silently dropped.
+the lines the panel shows under Apply and the notes Apply reports. Whatever a mode cannot
+do is said where it matters, never silently dropped.
 """
 
 import bpy

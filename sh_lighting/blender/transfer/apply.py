@@ -18,7 +18,7 @@ would give that object no light (its Attribute nodes read 0): such materials are
 the reason, nothing changed.
 
 This is kept beside ``shading.materials`` rather than as one of its MODES while that module's
-modes are being restructured (issue 21).
+modes are being restructured.
 """
 
 from typing import NamedTuple

@@ -159,8 +159,8 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
             return {"CANCELLED"}
         widened = []
         if mode == "KEEP_BSDF":
-            # The world stops lighting every diffuse surface: every material it lit gets SH
-            # (issue 20 item 9), not only the selected ones.
+            # The world stops lighting every diffuse surface: every material it lit gets SH,
+            # not only the selected ones.
             everything = materials.materials_of(scene.objects)
             widened = [m for m in everything if m not in mats]
             mats = everything

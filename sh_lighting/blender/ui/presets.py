@@ -93,7 +93,7 @@ def load_preset_file(operator, scene, path):
 
 
 def loaded_name(path):
-    """The name the preset menu shows for the preset file at ``path`` (issue 23 item 10):
+    """The name the preset menu shows for the preset file at ``path``:
     "Grace Cathedral" for the shipped ``grace_cathedral.json``, a user preset's file stem as
     it is."""
     path = Path(path)

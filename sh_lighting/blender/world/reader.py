@@ -320,7 +320,7 @@ def _original(datablock):
 
 def _tag_driver_targets(world):
     """Tag the IDs that drivers of ``world`` and its node tree read, so that the next
-    evaluation runs those drivers again (issue 20 item 15: a custom property set from Python,
+    evaluation runs those drivers again (a custom property set from Python,
     ``scene["k"] = 3``, tags nothing, and after a render the depsgraph kept the driven
     Strength of the old value, while the next render, with a depsgraph of its own, shows the
     new one). A tag changes no data."""

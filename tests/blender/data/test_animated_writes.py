@@ -1,4 +1,4 @@
-"""Writes over keyframed or driven coefficients and gains (issue 20 item 2, issue 23 item 2).
+"""Writes over keyframed or driven coefficients and gains.
 
 Every writer ends with what it stored being what renders: checked through the evaluated
 scene (what the depsgraph hands the render) at two frames, after frame changes.
@@ -91,7 +91,7 @@ def test_a_driven_gain_is_refused_by_name_unless_cleared(addon):
 
 @pytest.mark.parametrize("edit", ["exposure", "window", "rotate"])
 def test_design_edits_change_the_channels_and_keep_an_animated_gain(addon, edit):
-    """Issue 23 item 2: the L10 gain keyed 2.5 at frame 1; the old edits folded it into the
+    """The L10 gain keyed 2.5 at frame 1; the old edits folded it into the
     channel (L10 × 2.5), set it to 1, and the next frame multiplied again (6.25×)."""
     scene = bpy.context.scene
     api.set_coefficients(scene, BASE)

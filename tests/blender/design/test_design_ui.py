@@ -323,7 +323,7 @@ def test_previews_hold_cores_images_and_follow_edits(addon, monkeypatch):
 
 
 def test_preview_of_a_sunlit_hdri_reads_at_the_default_exposure(addon, hdri_dir):
-    """Issue 23 item 6: at exposure 0 the sphere of a sun-lit world was a white disc (forest:
+    """At exposure 0 the sphere of a sun-lit world was a white disc (forest:
     49 % of its pixels white). Now its brightest pixel is white and the rest shade: few
     pixels saturated, and the stored preview's bytes grow with the irradiance."""
     scene = bpy.context.scene

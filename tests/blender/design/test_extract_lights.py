@@ -356,7 +356,7 @@ def window_map(height=128, width=256, radiance=32.5):
 
 
 def test_a_bright_window_is_reported_with_what_would_take_it(addon, tmp_path):
-    """Issue 23 item 4: the window is larger than the size limit: the report says so, and
+    """The window is larger than the size limit: the report says so, and
     raising Size Limit takes it out."""
     scene = bpy.context.scene
     pixels, window = window_map()
@@ -390,7 +390,6 @@ def test_a_bright_window_is_reported_with_what_would_take_it(addon, tmp_path):
 
 
 def test_the_report_names_the_image_the_errors_and_the_time(addon, tmp_path):
-    """Issue 23 item 7."""
     scene = bpy.context.scene
     pixels, _ = sunny_map()
     environment_world(scene, write_exr(tmp_path / "sunny.exr", pixels), 1.5)
@@ -406,7 +405,7 @@ def test_the_report_names_the_image_the_errors_and_the_time(addon, tmp_path):
 
 
 def test_lights_go_into_their_own_collection_near_the_cursor(addon, tmp_path):
-    """Issue 23 item 8: a collection named for the image, the lights DISTANCE from the 3D
+    """A collection named for the image, the lights DISTANCE from the 3D
     cursor toward their source; re-extraction from another image renames it; Compute from
     World removes it with the lights, but not if the artist put something in it."""
     scene = bpy.context.scene
@@ -449,7 +448,6 @@ class ActiveLayout(RecordingLayout):
 
 
 def test_the_dialog_greys_the_target_while_error_target_is_off(addon):
-    """Issue 23 item 9."""
     drawn = {}
     for use in (False, True):
         layout = ActiveLayout()

@@ -1,4 +1,4 @@
-"""Which lights are the add-on's (issue 20 item 1): only the lights Extract Lights made are ever
+"""Which lights are the add-on's: only the lights Extract Lights made are ever
 changed or deleted by it. A duplicate (Shift+D copies the object's custom properties), a light
 linked from a library, or a look-alike an older file marked but whose name its record does not
 hold, is the artist's; a light of ours that the artist renamed is still ours."""

@@ -42,8 +42,8 @@ from sh_lighting.core.sh import spread_normals
 
 pytestmark = pytest.mark.blender
 
-EXACT_BOUND = 0.005  # the issue's: ≤ 0.5 % from a noise-free EXR of a nine-term world
-HEADROOM = 1.25  # the issue's: within 1.25× of the best nine-term fit (floor 0.5 %)
+EXACT_BOUND = 0.005  # the goal: ≤ 0.5 % from a noise-free EXR of a nine-term world
+HEADROOM = 1.25  # the goal: within 1.25× of the best nine-term fit (floor 0.5 %)
 
 
 @pytest.fixture(scope="module")
@@ -138,7 +138,7 @@ def test_exposure_against_the_world(photos, addon):
     match = api.photo_exposure(scene, fit)
     # Albedo 0.18 and the world's own strength: on the seen side the exposure is 1.
     assert match.seen_scale == pytest.approx(1.0, abs=0.02)
-    # The L00 calibration is as good as one photo fixes L00: poorly (the fit names
+    # The chrome ball's L00 calibration is as good as one photo fixes L00: poorly (the fit names
     # L1-1+L00 among its weak terms; the mirror prior puts the bright front on the back).
     # Measured: × 1.19 (mirror), 0.97 (no prior).
     assert "L1-1+L00" in fit.weak_terms

@@ -175,7 +175,7 @@ def test_metadata_names_the_world_image_while_the_values_are_the_computed_ones(a
 
 def test_gltf_export_refuses_to_pair_one_image_s_coefficients_with_another_s_cube(
         addon, tmp_path):
-    """Issue 20 item 11: computed from A, the world switched to B: the cube was B's, the
+    """Computed from A, the world switched to B: the cube was B's, the
     metadata A's. Now the export says so and writes nothing; computed again, it pairs B
     with B."""
     from sh_lighting.blender.world import compute
@@ -478,8 +478,8 @@ def test_presets_sit_in_the_header_of_both_main_panels(addon):
 
 def test_one_export_operator_with_a_format_choice_and_a_default_name_per_format(
         scene, tmp_path):
-    """Issue 19: one operator (was five); issue 23 item 3: three.js proposed the SH preset's
-    file name (the field turned red, nothing written) and its button label was cut."""
+    """One operator (was five); three.js proposed the SH preset's file name (the field
+    turned red, nothing written) and its button label was cut."""
     assert not [name for name in dir(bpy.types) if name.startswith("SHLIGHT_OT_export_")
                 and name != "SHLIGHT_OT_export_preset"]
     assert presets_ui.SHLIGHT_OT_export_preset.bl_label == "Export"
@@ -539,7 +539,7 @@ def test_file_browser_gives_the_format_its_extension(fmt, given, expected):
 
 
 def test_a_loaded_preset_is_reported_by_the_name_the_menu_shows(scene):
-    """Issue 23 item 10: "Grace Cathedral", not the file stem "grace_cathedral"."""
+    """The name "Grace Cathedral", not the file stem "grace_cathedral"."""
     from blender_scenes import run_execute
 
     path = preset_io.shipped_presets()["grace_cathedral"]

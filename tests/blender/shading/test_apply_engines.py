@@ -1,4 +1,4 @@
-"""Issue 21 item 1: the default Apply (Keep BSDF, Apply To Selected, through the operator)
+"""The default Apply (Keep BSDF, Apply To Selected, through the operator)
 shows the stored lighting plus the lamps once, in Cycles and in EEVEE.
 
 A white diffuse sphere alone under a world of radiance 0.6 + 0.3 z (its nine coefficients are

@@ -1,4 +1,4 @@
-"""Apply follows the material as it is now (issue 20 items 4-7), Cycles renders at 1 sample.
+"""Apply follows the material as it is now, Cycles renders at 1 sample.
 
 A white sphere under a world of radiance 0.6 + 0.3 z (nine terms exact), no lamps, the world's
 glossy and transmission visibility off: each pixel is then the SH emission alone (deterministic
@@ -129,7 +129,7 @@ def test_surface_from_a_node_group_is_refused_not_given_a_stray_colour(sphere):
 
 
 def test_apply_and_remove_reach_the_evaluated_scene_and_restore_emission_sampling(sphere):
-    """Open viewports draw the evaluated copies: they must change at once (issue 23 item 1)."""
+    """Open viewports draw the evaluated copies: they must change at once."""
     s = sphere
     material = s.sphere.data.materials[0]
     depsgraph = bpy.context.evaluated_depsgraph_get()
@@ -173,7 +173,7 @@ def test_world_switched_after_apply_is_named_by_the_status_line(sphere):
 
 def test_a_second_scene_sharing_the_material_is_counted_once_and_told_what_it_lacks(
         sphere, addon):
-    """Issue 20 item 8: Apply (Keep BSDF) in one scene, the material also shown in a second
+    """Apply (Keep BSDF) in one scene, the material also shown in a second
     scene with its own world and no coefficients. That world stops giving diffuse light too
     (no double count), and Apply says in its report what that scene then lacks."""
     from blender_scenes import run_execute

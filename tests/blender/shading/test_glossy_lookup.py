@@ -1,4 +1,4 @@
-"""Issue 21: the reflection maps Keep BSDF gives EEVEE, their lookup checked by rendering the
+"""The reflection maps Keep BSDF gives EEVEE, their lookup checked by rendering the
 nodes EEVEE renders with Cycles (no EEVEE shader compile; the same node math) against Cycles
 path tracing of the world.
 

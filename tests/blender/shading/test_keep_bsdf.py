@@ -208,7 +208,7 @@ def test_principled_weight_follows_metallic_transmission_and_ior(studio):
 
 def test_the_worlds_prefiltered_maps_follow_compute_and_go_with_remove(addon, hdri_dir,
                                                                      tmp_path):
-    """Issue 21 item 1: the maps EEVEE's reflections come from are made by Apply, rewritten in
+    """The maps EEVEE's reflections come from are made by Apply, rewritten in
     place by Compute from World (Strength 2: twice the radiance, the same images), saved
     packed, and deleted by Remove with every node Apply added."""
     s = ShadowScene(hdri_dir / "forest.exr", 8, tmp_path)

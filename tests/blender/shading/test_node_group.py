@@ -426,7 +426,7 @@ def test_sh_render_vs_path_traced_hdri(tmp_path, hdri_dir):
 
 
 def test_gains_added_for_an_old_file_go_through_scene_data():
-    """Review (issue 20): ensure_node_group wrote missing gains directly, without their UI data
+    """Review: ensure_node_group wrote missing gains directly, without their UI data
     or a tag; now through scene_data.add_missing_gains."""
     scene = bpy.context.scene
     scene_data.store(scene, COEFFS, SCRIPT)

@@ -5,7 +5,7 @@ Tolerances, measured (bake 64 samples, ground 4 m in 24 × 24 quads, box in 6 ×
 48 px; the reference path-traced at 512 samples): relative RMSE over the object pixels 0.96 %
 (0.40 % over 3 × 3 pixel blocks), brightness 1.0005. What remains is the per-corner
 interpolation across a face (at 16 × 16 quads and 4 × 4 it was 5.4 %) and the reference's own
-noise; the tolerance is issue 22's goal, 2 %.
+noise; the tolerance is the goal, 2 %.
 """
 
 import json
@@ -21,7 +21,7 @@ import blender_scenes as scenes
 import transfer_scenes as ts
 from sh_lighting.blender.transfer import bake
 
-RENDER_TOLERANCE = 0.02  # issue 22's goal; 0.96 % measured (docstring)
+RENDER_TOLERANCE = 0.02  # the goal; 0.96 % measured (docstring)
 BRIGHTNESS_TOLERANCE = 0.01  # 1.0005 measured
 LINEAR_TOLERANCE = 1e-5  # float32 of an emission render: exact up to rounding
 REPO = Path(__file__).resolve().parents[3]

@@ -14,7 +14,7 @@ from sh_lighting.blender.ui import transfer as transfer_ui
 
 # Measured 0.96 % here (Keep BSDF, Cycles 16 samples: the BSDF gets no world and no
 # diffuse-ray emission, so what is left is the camera's view of the transfer), as in Emission
-# Only (tests/blender/transfer/test_transfer.py); issue 22's goal is 2 %.
+# Only (tests/blender/transfer/test_transfer.py); the goal is 2 %.
 RENDER_TOLERANCE = 0.02
 
 

@@ -83,7 +83,7 @@ def one_bright_texel_exr(path, height=32, width=64, row=9, column=40):
 
 @pytest.mark.parametrize("rotation", [None, (0.3, -0.2, 1.1)])
 def test_compute_operator_reports_the_image_the_error_and_the_time(addon, tmp_path, rotation):
-    """Issue 23 item 7: the report names the image and its world, gives the 9-term error
+    """The report names the image and its world, gives the 9-term error
     against the world (a near-delta: about 3.07 % mean and at most 9.4 % max of the light,
     through a Mapping rotation and Strength 2 too) and the time."""
     path = one_bright_texel_exr(tmp_path / "one texel.exr")
@@ -385,7 +385,7 @@ def test_apply_and_remove_selected_then_all(addon):
 
 
 def test_keep_bsdf_on_the_selection_lights_every_material_the_world_lit(addon):
-    """Issue 20 item 9: Keep BSDF switches the world's diffuse light off for the whole scene,
+    """Keep BSDF switches the world's diffuse light off for the whole scene,
     so Apply To Selected (the default) gives every material SH, and says so; Remove likewise."""
     scene = bpy.context.scene
     (lit, lit_mat), (other, other_mat) = two_objects_with_materials()
@@ -410,7 +410,7 @@ def test_panel_lines_fit_the_sidebar():
 
 
 def test_panel_says_what_the_mode_does_and_what_emission_drops(addon):
-    """Issue 23 item 5 / issue 21 item 1: the Mode beside Apply, a line for the engine, a line
+    """The Mode beside Apply, a line for the engine, a line
     when Emission Only would leave the scene's lamps out (and Apply's report says it)."""
     scene = bpy.context.scene
     two_objects_with_materials()
@@ -496,7 +496,7 @@ def test_apply_polls_explain_why_disabled(addon):
 
 
 def test_compute_and_extract_lights_share_one_no_world_poll(addon):
-    """Issue 19: the no-world poll was copied per operator, with different messages."""
+    """The no-world poll was copied per operator, with different messages."""
     from sh_lighting.blender.ui import polls
 
     bpy.context.scene.world = None
@@ -507,7 +507,7 @@ def test_compute_and_extract_lights_share_one_no_world_poll(addon):
 
 
 def test_keep_bsdf_says_which_reflections_eevee_does_not_show(addon):
-    """Issue 21 item 1: EEVEE gets the world's reflections back for Principled BSDFs only
+    """EEVEE gets the world's reflections back for Principled BSDFs only
     (shading/glossy.py); Apply's report names the shaders and layers it does not model."""
     scene = bpy.context.scene
     (lit, material), _other = two_objects_with_materials()

@@ -151,7 +151,7 @@ def test_8bit_colour_spaces_agree_with_cycles(tmp_path, working, space):
 
 @needs_working_spaces
 def test_red_srgb_png_in_an_acescg_file_is_what_cycles_renders(tmp_path):
-    """The issue's case: pure red sRGB in ACEScg is (0.613, 0.070, 0.021), not (1, 0, 0)."""
+    """Pure red sRGB in ACEScg is (0.613, 0.070, 0.021), not (1, 0, 0)."""
     set_working_space("ACEScg")
     red = np.zeros((8, 16, 3))
     red[..., 0] = 255
