@@ -1,87 +1,12 @@
-"""Exporters (and importers) of the 9 lighting coefficients for other tools.
+"""Exporters (and importers) of the 9 lighting coefficients for three.js, glTF
+EXT_lights_image_based (Babylon.js) and Filament.
 
-Our coefficients are raw radiance L_lm in the paper's real SH basis (no Condon-Shortley phase),
-Blender world axes (z up). Each target differs in up to three ways: its axes, what the numbers
-mean (radiance, irradiance, or values pre-scaled for a shader) and the basis signs. A white
-Lambertian surface lit by the 9-term lighting shows E(n)/π in every target (E from eq. 13 of
-the paper, ``irradiance.irradiance``), which is what the tests check, target by target.
-
-Axes: all three targets use a right-handed y-up frame. Unless said otherwise it is the glTF
-frame, into which Blender's glTF exporter maps (x, y, z)_blender → (x, z, −y)_gltf
-(``frames.BLENDER_TO_Y_UP``), so lighting exported here lines up with a glTF export of the
-same Blender scene.
-
-1. **three.js** ``SphericalHarmonics3`` / ``LightProbe`` (``to_threejs_sh``). 27 floats,
-   coefficient-major: [L00 r, L00 g, L00 b, L1-1 r, ...] (``toArray``/``fromArray``; a
-   ``LightProbe.toJSON()`` object stores the same array as ``sh``, next to ``intensity``).
-   Values are radiance L_lm in the paper's basis, no sign flips, glTF frame (three.js world
-   axes are right-handed, y up; its GLTFLoader does not change axes). The file
-   (``to_threejs_json``) is a three.js object JSON that ``ObjectLoader().parse`` reads
-   (``LightProbe.fromJSON`` is gone since r182). Checked in the three.js source and run in
-   node (``tests/interop``): ``getBasisAt`` uses the paper's table (0.282095; 0.488603 y,
-   z, x; 1.092548 xy, yz; 0.315392 (3z² − 1); 1.092548 xz; 0.546274 (x² − y²));
-   ``getIrradianceAt`` and the shader
-   ``shGetIrradianceAt`` evaluate eq. 13 with the paper's rounded constants (0.886227,
-   2·0.511664, 2·0.429043, 0.743125, 0.247708) at the world-space normal, and the indirect
-   diffuse term is ``irradiance * BRDF_Lambert(diffuseColor)`` = E · albedo/π.
-
-2. **glTF EXT_lights_image_based** ``irradianceCoefficients``
-   (``to_gltf_irradiance_coefficients``; the whole environment with its specular cube is
-   ``gltf_environment``). A 9×3 array, rows L00, L1-1, L10, L11, L2-2, L2-1, L20, L21, L22
-   (the order the Babylon.js loader reads). The extension text says only "spherical harmonic
-   coefficients for irradiance up to l=2": no scaling, signs or frame. Its main reader,
-   Babylon.js (``EXT_lights_image_based.ts``, ``sphericalPolynomial.ts``, run in node by
-   ``tests/interop``), multiplies by the light's ``intensity``, divides by π, and in its
-   default shading path (``useSphericalHarmonics = true``) multiplies by its basis constants
-   √(1/4π), −√(3/4π), √(3/4π), −√(3/4π), √(15/4π), −√(15/4π), √(5/16π), −√(15/4π), √(15/16π)
-   (a Condon-Shortley-signed basis) and sums the plain polynomials at the *lookup vector*:
-   the world normal times the light's rotation, with z negated in a right-handed scene
-   (``REFLECTIONMAP_OPPOSITEZ``: Babylon's cube textures live in its native left-handed
-   axes). So in a right-handed Babylon scene, glTF's own frame, the lookup vector of a glTF
-   normal (x, y, z) is (x, y, −z) = (x, z, y)_blender (``BLENDER_TO_BABYLON_LOOKUP``, a
-   reflection), and a Lambertian surface shows E(n)/π exactly when the array holds
-   irradiance E_lm = Â_l L_lm of the lighting in those lookup axes, with the sign (−1)^|m|
-   (L1-1, L11, L2-1, L21 negated). **We write that.** In Babylon's default left-handed scene
-   the loader mirrors the geometry (root node: scale z by −1, turn 180° about y) but not the
-   environment, so the same file shows the lighting turned 180° about the up axis; setting
-   the texture's reflection matrix to a 180° turn about y afterwards makes it exact there too
-   (``tests/interop``). Uncertain (read, not run): other readers may assume radiance, no sign
-   flips or another frame; Babylon's non-default polynomial path
-   (``useSphericalHarmonics = false``) was not checked.
-
-3. **Filament** cmgen ``sh.txt`` (``to_filament_sh_txt``) and
-   ``IndirectLight::Builder::irradiance(3, sh)`` (``filament_prescaled``). Nine lines
-   ``(r, g, b); // L00, irradiance, pre-scaled base``; the values are "shader-ready", *not*
-   L_lm: Â_l · K_lm · L_lm / π with K_lm the paper's constant of each polynomial (0.282095,
-   0.488603, ..., 0.546274). Filament's shader
-   (``Irradiance_SphericalHarmonics``) evaluates sh[0] + sh[1] y + sh[2] z + sh[3] x +
-   sh[4] yx + sh[5] yz + sh[6] (3z² − 1) + sh[7] zx + sh[8] (x² − y²), clamped at 0, which is
-   then E(n)/π: the Lambert 1/π is included. Checked in Filament's source (libs/ibl
-   CubemapSH.cpp: ``computeSH`` with irradiance, then ``preprocessSHForShader``; its basis has
-   the Condon-Shortley sign and so do its pre-scale factors, so the signs cancel; tools/cmgen:
-   the output format). We write the shortest decimal that reads back to the same float
-   (cmgen writes 15 fixed decimals) and **no windowing**, i.e. cmgen's ``--sh-window=no``.
-   cmgen windows by default (``--sh-window=auto``, CubemapSH::windowSH): per colour channel
-   it searches (by bisection) the largest cutoff w whose window (sin(πl/w)/(πl/w))⁴ on band l
-   makes the reconstruction non-negative (Sloan, "Deringing Spherical Harmonics"), so its
-   sh.txt of an HDRI with a strong sun has weaker l = 1, 2 bands than ours.
-   Filament's reader of a sh.txt (``libs/filamentapp`` IBL.cpp) reads each line with
-   ``sscanf(line, "(%f,%f,%f)")``. Two frames:
-
-   - ``frame="cmgen"`` (default): the frame of what ``cmgen`` itself writes, by default
-     (mirrored), for the same equirectangular image: (x, y, z)_cmgen = (y, z, x)_blender, so
-     our sh.txt lines up with cmgen's specular KTX of that image. Derived from cmgen's
-     source: it reads an equirect texel at u ∝ atan2(s.x, s.z), v from asin(s.y) (image
-     centre toward +z, top +y), then mirrors x (``mirrorCubemap`` samples (−x, y, z)) unless
-     ``--no-mirror``. Without the mirror the frame would be a reflection of Blender's, which
-     no rotation reaches; with it, it is a proper rotation, 90° about the up axis from the
-     glTF frame. cmgen's sub-texel resampling is ignored.
-   - ``frame="gltf"``: the glTF frame, matching a glTF export of the Blender scene
-     (Filament's world axes are right-handed with y up, like glTF's).
-
-   ``IndirectLight::Builder::radiance()`` (Condon-Shortley-signed radiance) is not offered.
-
-The ``from_*`` functions invert the exporters exactly (to rounding), for round trips.
+Ours are raw radiance L_lm (paper's real basis, no Condon-Shortley phase, Blender axes, z up);
+a target differs in axes (glTF's y-up frame: (x, y, z)_blender -> (x, z, -y)), in meaning
+(radiance L_lm, irradiance E_lm = Â_l L_lm, or Filament's pre-scaled Â_l K_lm L_lm / π) and in
+basis signs ((-1)^|m| for Babylon). In every target a white Lambertian surface shows E(n)/π
+(eq. 13): the tests check that, target by target. The ``from_*`` functions invert the
+exporters. Each client's conventions, as read in its source and run: docs/interop.md.
 """
 
 import hashlib
