@@ -1,26 +1,13 @@
 """Public scripting API of SH Lighting; works in background mode without any UI context.
 
-Example::
-
-    import bpy
-    from sh_lighting import api   # bl_ext.user_default.sh_lighting.api when installed
-
-    scene = bpy.context.scene
     coeffs = api.compute_from_world(scene)        # (9, 3) L_lm, stored on the scene too
     coeffs[2] *= 2.0                              # twice the light from above vs below
     api.set_coefficients(scene, coeffs)
     api.apply_to_materials(bpy.data.materials, scene)
 
-Coefficients are raw radiance L_lm (Ramamoorthi and Hanrahan 2001, eq. 10), in the order of
-``sh_lighting.core.sh.COEFFICIENT_NAMES`` (L00, L1-1, L10, L11, L2-2, ...), RGB per row, in
-Blender world axes. Errors are raised with the same messages the operators report.
-
-Besides computing, storing and applying coefficients, the API re-exports the preset functions
-(``export_preset``, ``import_preset``, ``shipped_presets``, ``user_presets``,
-``save_user_preset``, ``remove_user_preset``; formats in ``FORMATS``) and the lighting-design
-edits (``rotate``, ``match_mapping``, ``exposure``, ``saturation``, ``band_gains``,
-``flip_vertical``, ``apply_window``, ``describe``, ``negative_warning``) and the lights
-(``extract_lights``; ``split_sun`` is ``extract_lights`` with one light).
+Coefficients are raw radiance L_lm (Ramamoorthi and Hanrahan 2001, eq. 10) in the order of
+``core.sh.COEFFICIENT_NAMES``, RGB per row, Blender world axes; errors carry the operators'
+messages. Also re-exported: presets, design edits, lights, transfer, photo (``__all__``).
 """
 
 import bpy

@@ -1,26 +1,11 @@
 """Where each pixel of a photographed ball points: the ball's world normal per pixel.
 
-A grey ball's picture is its radiance albedo · E(n) / π at the normal n the pixel sees
-(docs/reference.md §1, eq. 1 and 13). This module gives n for the pixels of a photo.
-
-Conventions:
-
-* Images are ``(H, W, C)`` arrays with rows **top to bottom**; pixel (row i, column j)
-  covers [j, j + 1) × [i, i + 1) in pixel units from the image's top-left corner, so its
-  centre is (j + ½, i + ½). The ball's circle (cx, cy, r) is given in the same units.
-* The camera (Blender's): it looks down its local −Z with +Y up and +X to the right;
-  ``matrix`` is the 3×3 rotation taking camera axes to world axes (the camera object's
-  world matrix without translation and scale). Camera local +Z points back towards the
-  viewer.
-* Orthographic: every pixel's ray is −Z; the pixel at offset (u, v) = ((x − cx)/r,
-  −(y − cy)/r) from the circle's centre sees the normal (u, v, √(1 − u² − v²)) in camera axes.
-* Perspective (focal length f and sensor size in mm; the sensor spans the larger image side,
-  Blender's sensor fit "Auto", or the side ``sensor_fit`` names): the pixel's ray is
-  d = ((x − W/2) s, −(y − H/2) s, −f), s = sensor / side. The ball's centre lies on the ray
-  through the circle's centre, at distance 1; its angular radius α is the mean angle from
-  that ray to the rays through the four points (cx ± r, cy), (cx, cy ± r), so its radius is
-  sin α. A pixel's normal is where its ray first meets that sphere: t = d·C − √((d·C)² −
-  (1 − sin² α)), n = (t d − C) / sin α. Pixels whose ray misses the sphere are not ball.
+A grey ball shows albedo · E(n) / π at the normal n a pixel sees (eq. 1, 13). Pixel (i, j)
+has its centre at (j + ½, i + ½) from the top-left; the camera looks down −Z, +Y up.
+Orthographic: the normal at (u, v) = ((x − cx)/r, −(y − cy)/r) is (u, v, √(1 − u² − v²)).
+Perspective: the ray d = ((x − W/2) s, −(y − H/2) s, −f) meets the ball (centre C at distance
+1, radius sin α) at t = d·C − √((d·C)² − cos² α), n = (t d − C) / sin α; rays that miss it are
+not ball. Details: docs/modules.md.
 """
 
 from dataclasses import dataclass

@@ -1,31 +1,11 @@
 """Where the ball is in a photo: a suggested circle (cx, cy, r) for Match Photo to offer.
 
-Never required (the circle can be typed, or dragged in the Image Editor) and never used
-unasked: the user accepts or corrects it. Pixel conventions are ``ball_camera``'s (rows top to
-bottom, pixel centres at half-integers, the circle in pixels from the top-left corner).
-
-The method is a gradient Hough transform for circles, then a fit at full resolution:
-
-1. the photo's luminance (Rec. 709 weights), as √ (so a dim background's edge counts nearly as
-   much as a bright one's), averaged over 3 × 3 pixels, and box-averaged by a whole factor to
-   at most ``WORK_SIDE`` pixels on its longer side (then 3 × 3 again);
-2. its gradient by central differences; the ``EDGE_FRACTION`` strongest pixels are edges;
-3. each edge votes for the centres along its gradient, both ways (the ball may be brighter or
-   darker than what is behind it), at every whole radius from ``MIN_FRACTION`` to
-   ``MAX_FRACTION`` of the image's shorter side; votes are pooled over (2 ``POOL`` + 1)²
-   cells, and the cell with the most is the guess;
-4. at full resolution, the (3 × 3 averaged) luminance along ``RAYS`` rays from the guessed
-   centre, where it changes fastest within ±``SEARCH`` coarse pixels of the guessed radius,
-   gives one rim point
-   per ray (none where the change is below ``EDGE_SHARE`` of the median ray's); a circle is
-   fitted to them (algebraically: x² + y² + D x + E y + F = 0 by least squares, Kåsa's fit),
-   the points far from it dropped and refitted; then again on the luminance itself (not
-   averaged: the rim's place, unblurred) along rays from that circle's centre, ±``SEARCH``
-   full-resolution pixels about its radius.
-
-``score``: the fraction of the rays whose rim point lies on the circle (within ``INLIER_PX``);
-below ``MIN_SCORE``, or with a rim that stands out less than ``MIN_CONTRAST`` × the typical
-change along the rays (noise, texture), no ball is suggested.
+Never required, never used unasked. A gradient Hough transform for circles on the √ luminance
+(box-averaged to at most ``WORK_SIDE`` pixels; edges vote both ways along their gradient), then
+rim points along ``RAYS`` rays at full resolution, a Kåsa fit (x² + y² + D x + E y + F = 0 by
+least squares) with outliers dropped, refined once on the unblurred luminance. ``score``: the
+fraction of rays on the circle; below ``MIN_SCORE`` or ``MIN_CONTRAST`` nothing is suggested.
+Pixel conventions are ``ball_camera``'s. Steps: docs/modules.md.
 """
 
 from dataclasses import dataclass

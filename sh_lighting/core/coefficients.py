@@ -1,19 +1,10 @@
 """The one check of lighting coefficients handed to sh_lighting by users, files and the core.
 
-``check_coefficients`` takes what a script, a preset or another module passes as the
-coefficients L_lm (a list of RGB rows, a tuple, a numpy array, rows of ``mathutils`` vectors)
-and returns a float64 ``(count, 3)`` copy, or raises a ValueError (or the ``error`` class
-given, e.g. ``PresetError``) saying what is wrong and what to pass instead:
-
-* a container that is not a list of rows (a string, a dict, a number, None);
-* a row that is not 3 values ([r, g, b]), or a wrong number of rows;
-* a value that is not a real number: strings ("1"), booleans, complex numbers, None;
-* NaN or infinity;
-* a magnitude beyond the float32 range (±3.4e38): Blender renders the coefficients in float32
-  (custom properties read by the Attribute node, the node group's arithmetic), where such a
-  value becomes infinite and the lighting renders black.
-
-The first bad value is named by coefficient and channel ("L10 channel G").
+``check_coefficients`` takes rows of RGB (lists, tuples, numpy, ``mathutils`` vectors) and
+returns a float64 (count, 3) copy, or raises a ValueError (or the ``error`` class given)
+naming the first bad value by coefficient and channel ("L10 channel G") and what to pass:
+not rows of 3, not real numbers (strings, booleans, None), NaN, infinity, or beyond float32
+(±3.4e38, where Blender's float32 render would turn the lighting black).
 """
 
 from numbers import Real

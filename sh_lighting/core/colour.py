@@ -1,30 +1,13 @@
 """Colour: decoding 8-bit texels, the RGB working spaces Blender 4.2–5.0 render in, luminance.
 
-**Working spaces.** Coefficients are in the scene's working (scene-linear) RGB space: always
-"Linear Rec.709" before Blender 5.0; 5.0 lets a file choose "Linear Rec.709", "Linear Rec.2020"
-or "ACEScg" (``bpy.data.colorspace.working_space``). ``WORKING_SPACES`` gives each one's CIE
-xy primaries and white point (ITU-R BT.709-6, ITU-R BT.2020-2, SMPTE ST 2065-1 / Academy
-S-2014-004 for AP1 with the ACES white). From them:
-
-* ``rgb_to_xyz_matrix(space)``: the normalised primary matrix (SMPTE RP 177): the columns are
-  the primaries' XYZ scaled so that RGB (1, 1, 1) is the white point with Y = 1;
-* ``luminance_weights(space)``: the Y row of that matrix adapted to D65 (what a luminance of
-  the working space's RGB means; Rec.709 gives 0.2126, 0.7152, 0.0722). This is the project's
-  one definition of luminance (saturation edits, term descriptions, sun detection);
-* ``conversion_matrix(source, target)``: RGB of ``source`` to RGB of ``target`` through XYZ,
-  with a Bradford chromatic adaptation between white points (ACEScg's white is ~D60), which is
-  what Blender's OpenColorIO configuration does (checked against ``mathutils.Color`` in
-  tests/blender/world/test_colour_spaces.py to 1e-4);
-* ``convert_coefficients(coeffs, source, target)``: L_lm (or any (..., 3) RGB) converted;
-  projection is linear in the radiance, so converting L_lm equals converting the image.
-
-**8-bit texels.** An 8-bit image in colour space ``BYTE_SPACES`` is decoded as Blender renders
-it: byte / 255, its transfer curve (the exact IEC 61966-2-1 sRGB curve, ``srgb_to_linear``,
-which Cycles applies in float32 to sRGB textures of a Rec.709 file), then the matrix from the
-image's primaries to the working space (what OpenColorIO applies on load otherwise):
-``byte_decoding`` tabulates the curve for the 256 bytes and gives the matrix, ``decode_bytes``
-applies them (a table look-up per channel, a 3×3 product per texel). Checked against Cycles
-captures for every space in both a Rec.709 and an ACEScg file (tests/blender/world/test_colour_spaces.py).
+``WORKING_SPACES`` (Linear Rec.709, Linear Rec.2020, ACEScg) by their CIE xy primaries and
+white; ``rgb_to_xyz_matrix`` is the normalised primary matrix (SMPTE RP 177),
+``luminance_weights`` its Y row adapted to D65 (Rec.709: 0.2126, 0.7152, 0.0722, the project's
+one luminance), ``conversion_matrix`` goes through XYZ with Bradford adaptation, as Blender's
+OpenColorIO does; converting L_lm equals converting the image (projection is linear).
+8-bit texels (``BYTE_SPACES``) decode as Blender renders them: byte / 255, the IEC 61966-2-1
+sRGB curve, then the matrix to the working space (``byte_decoding``, ``decode_bytes``).
+Details: docs/modules.md.
 """
 
 import numpy as np

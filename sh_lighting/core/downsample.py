@@ -1,22 +1,11 @@
 """Box downsampling of an equirectangular map by whole factors, in one float32 pass over it.
 
-Output texel (I, J) of a factor-k downsample is exactly the union of the k × k input texels
-(i, j) with i // k = I, j // k = J (the rows of both maps are uniform in θ, so their edges
-coincide), and holds their solid-angle-weighted mean L̄_B = Σ Ω_t L_t / Σ Ω_t: the map's power
-∫ L dω is unchanged, and so is every quantity linear in L whose kernel is constant on the blocks.
-
-For a kernel f(ω) that is 1-Lipschitz in angle (such as max(n·ω, 0) for a unit n, the integrand
-of eq. 1), the block's contribution changes by
-
-    Σ_t Ω_t L_t k_t − L̄_B Σ_t Ω_t k_t = Σ_t Ω_t (L_t − L̄_B)(k_t − k̄_B),
-
-k_t the mean of f over texel t, k̄_B its Ω-weighted mean over the block; |k_t − k̄_B| is at most
-the block's angular diameter d_B, so the change over the whole map is at most
-
-    Σ_B d_B Σ_(t in B) Ω_t |L_t − L̄_B|      (``variation_bound``, per channel),
-
-which ``block_downsample`` returns beside the map: zero for a map constant on its blocks, small
-wherever the map is smooth, and never below the true change (``irradiance.error_estimate``).
+Output texel (I, J) of factor k is the union of the k × k texels with i // k = I, j // k = J
+and holds their solid-angle-weighted mean L̄_B = Σ Ω_t L_t / Σ Ω_t (the power ∫ L dω kept).
+For a 1-Lipschitz kernel f (max(n·ω, 0), eq. 1) the change of ∫ L f dω is
+Σ_t Ω_t (L_t − L̄_B)(k_t − k̄_B), so at most Σ_B d_B Σ_(t in B) Ω_t |L_t − L̄_B| with d_B the
+block's angular diameter (``variation_bound``, returned by ``block_downsample`` beside the
+map; ``irradiance.error_estimate``).
 """
 
 from math import gcd, pi

@@ -1,16 +1,10 @@
 """Exact lighting edits on the 9 (or any (order+1)²) RGB coefficients L_lm.
 
-Every edit is linear in the lighting L(ω), so it acts exactly on the coefficients; each
-function returns new float64 coefficients of the same shape (Blender world axes, z up).
-
-* ``rotate``: the lighting turned by yaw, pitch and roll (convention in ``yaw_pitch_roll_matrix``),
-  L'(ω) = L(Rᵀω), coefficients through the band-wise SH rotation of ``rotation.py``;
-* ``exposure``: L' = 2^stops L;
-* ``saturation``: each coefficient's RGB blended toward its Rec. 709 luminance (grey);
-* ``band_gains``: separate gains for the ambient (l = 0), directional (l = 1) and quadratic
-  (l = 2) bands, the knobs of eq. 13's terms;
-* ``flip_vertical``: the lighting mirrored z → −z ("lit from below", the paper's figure 4 use);
-* ``describe_coefficients``: what each of the 9 coefficients does in the current lighting.
+Each edit is linear in L(ω), so exact on the coefficients; each returns new float64 ones.
+``rotate``: L'(ω) = L(Rᵀω) by yaw, pitch, roll (the band-wise rotation of ``rotation``);
+``exposure``: L' = 2^stops L; ``saturation``: each RGB row blended toward its luminance;
+``band_gains``: one gain per band l = 0, 1, 2 (eq. 13's terms); ``flip_vertical``: z → −z;
+``describe_coefficients``: what each coefficient does in the current lighting.
 """
 
 import numpy as np

@@ -1,15 +1,9 @@
 """Blender's equirectangular (latitude-longitude) mapping and the exact geometry of its texels.
 
-Conventions (docs/reference.md §3, checked against Cycles renders):
-
-* a direction d = (x, y, z) in Blender world axes (z up) reads the image at
-  u = 0.5 - atan2(y, x) / 2π (wrapped to [0, 1)) and v = 1 - acos(z) / π, with v measured from
-  the bottom; the image centre faces +X and u = 0.25 faces +Y;
-* so with φ = atan2(y, x) and θ = acos(z): φ = π - 2πu and θ = π(1 - v);
-* arrays handed to the core are ``(H, W, C)`` with rows **top to bottom** (row 0 is θ ∈ [0, π/H],
-  the zenith); Blender's ``Image.pixels`` are bottom row first, so the Blender layer flips them;
-* texel (i, j) covers θ ∈ [iπ/H, (i+1)π/H] and φ ∈ [π - 2π(j+1)/W, π - 2πj/W]; its centre is
-  the direction of (i + ½, j + ½); its exact solid angle is (2π/W)(cos θ_i - cos θ_(i+1)).
+A direction d = (x, y, z) (Blender axes) reads u = 0.5 − atan2(y, x) / 2π, v = 1 − acos(z) / π
+from the bottom (docs/reference.md §3): the centre faces +X, u = 0.25 faces +Y. Arrays are
+(H, W, C), rows top to bottom; texel (i, j) covers θ ∈ [iπ/H, (i+1)π/H],
+φ ∈ [π − 2π(j+1)/W, π − 2πj/W], solid angle (2π/W)(cos θ_i − cos θ_(i+1)).
 """
 
 from math import pi

@@ -1,30 +1,12 @@
 """Exact changes of axes for lighting coefficients: the paper's frame, Blender's, glTF's.
 
-Coefficients in this project are stored in Blender world axes (z up, docs/reference.md §3). Other
-sources and targets use y-up frames; changing frames is a proper rotation of the directions,
-so the coefficients change by a real SH rotation, band by band (``rotation.sh_rotation_matrix``).
-It is not a relabelling: the l = 2 coefficients mix (L20 and L22 in particular).
-
-A frame change is given as the 3×3 matrix F that maps a direction's Blender coordinates to its
-coordinates in the other frame (or the reverse, as named). The lighting function itself does
-not move: L_other(F ω) = L_blender(ω), i.e. the coefficients are those of the lighting rotated
-by F, ``rotate_coefficients(coeffs, F)``. Each band's energy Σ_m L_lm² is unchanged.
-
-* **The paper's probes** (Figure 2; docs/reference.md §4): +y is up, so L1-1 is the vertical moment.
-  Brought to Blender by (x, y, z)_blender = (x, −z, y)_paper; afterwards L10 (Blender) equals
-  L1-1 (paper).
-* **glTF, three.js, Filament (gltfio)**: right-handed, +y up. Blender's glTF exporter (with its
-  default "+Y Up") maps (x, y, z)_blender → (x, z, −y)_gltf.
-
-Both matrices are proper rotations (orthonormal, determinant +1; checked at import). For
-such axis permutations (with signs) every entry of the SH rotation matrix of bands 0-2 is one
-of 0, ±½, ±√3/2, ±1; the least-squares solution is snapped to those exact values (after
-checking it is within 1e-9 of them), so that e.g. the paper's L1-1 = 0.39 becomes Blender's
-L10 = 0.39 exactly, not 0.38999999999999996.
-
-The paper frame chosen in docs/reference.md §4 is the glTF frame, so ``paper_to_blender`` and
-``y_up_to_blender`` give the same numbers; they are kept apart because they say different
-things about where the data came from.
+A frame change F (3×3, Blender coordinates to the other frame's) is a proper rotation, so the
+coefficients change by a real SH rotation band by band: L_other(F ω) = L_blender(ω),
+``rotate_coefficients(coeffs, F)`` (the l = 2 terms mix). The paper's probes (+y up):
+(x, y, z)_blender = (x, −z, y)_paper; glTF, three.js, Filament: (x, y, z)_blender →
+(x, z, −y)_gltf. For these signed permutations every rotation entry is 0, ±½, ±√3/2 or ±1, and
+the matrices are snapped to those exact values (the paper's L1-1 = 0.39 is Blender's L10 =
+0.39 exactly). Details: docs/modules.md.
 """
 
 from functools import lru_cache

@@ -1,38 +1,13 @@
 """The world's glossy reflection as a few prefiltered maps plus a split-sum factor.
 
-In EEVEE, Keep BSDF hides the world from EEVEE's own lighting (its one world capture serves
-diffuse and glossy alike), so the diffuse light comes from the nine SH terms alone. The glossy
-part is given back as Kautz, Daubert and Seidel ("Advanced Environment Mapping in VR
-Applications", 2004) do: diffuse by SH, glossy by environment maps prefiltered for the
-roughness. With the split-sum approximation (Karis, "Real Shading in Unreal Engine 4", 2013)
-a surface of perceptual roughness r, GGX α = r², seen at n·v reflects toward the viewer
-
-    L_glossy ≈ P_α(R) · (F0 · A(r, n·v) + B(r, n·v)),
-
-with R the mirror direction of the view about the normal, P_α the radiance prefiltered with
-the GGX lobe (``specular.prefilter``) and A, B the scale and bias of the environment BRDF
-integrated over the hemisphere. ``environment_brdf`` integrates A and B numerically;
-``environment_brdf_table`` tabulates them for the shader, as Karis does. (His analytic fit for
-mobiles, after Lazarov 2013, is 0.1–0.2 too low at r ≤ 0.5 against this integral, measured.)
-The prefilter's lobe is centred on R and as wide as the BRDF's at normal view without its
-n·l; the BRDF's lobe f n·l leans toward the normal and widens the rougher the surface and
-the more grazing the view. So the table also holds, for each (r, n·v), where and at which
-roughness the maps are looked up: toward the lobe's mean direction (``lobe_factor``, in
-place of R; Lagarde and de Rousiers' "specular dominant direction" of "Moving Frostbite to
-Physically Based Rendering", 2014, a fit by the roughness alone, was up to 22° off it at
-grazing view, tests/core) and at the roughness whose prefilter kernel is as spread as the lobe
-(``effective_roughness``).
-Cycles' Principled BSDF renders multiple-scattering GGX, which gives back the energy single
-scattering loses: the shader adds it as Fdez-Agüera ("A Multiple-Scattering Microfacet Model
-for Real-Time Image-based Lighting", 2019) does, with E = A + B, F_avg = F0 + (1 − F0)/21,
-
-    F0 A + B + (F0 A + B) F_avg (1 − E) / (1 − F_avg (1 − E)).
-
-``level_maps`` prefilters the world at the roughness levels ``ROUGHNESS_LEVELS`` into
-equirectangular maps in Blender world directions (the world's Mapping rotation and Strength
-applied, docs/reference.md §3), sharper levels wider (``LEVEL_WIDTHS``); between two levels
-the shader interpolates linearly in r. Level r = 0 (a mirror) is the mean of the world over
-each texel. Pure numpy; pixels (H, W, 3 or 4), rows top to bottom.
+Diffuse by SH, glossy by environment maps prefiltered for the roughness (Kautz, Daubert and
+Seidel 2004). Split sum (Karis 2013): L_glossy ≈ P_α(d) · (F0 · A(r, n·v) + B(r, n·v)), P_α
+the GGX-prefiltered radiance (``specular.prefilter``), A, B the integrated environment BRDF
+(``environment_brdf_table``), looked up along the lobe's mean direction d (``lobe_factor``) at
+the roughness whose kernel is as spread as the lobe (``effective_roughness``); multiple
+scattering as Fdez-Agüera 2019: F0 A + B + (F0 A + B) F_avg (1 − E) / (1 − F_avg (1 − E)),
+E = A + B. ``level_maps`` prefilters the world at ``ROUGHNESS_LEVELS``. Details:
+docs/modules.md.
 """
 
 import functools

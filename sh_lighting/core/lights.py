@@ -1,44 +1,11 @@
-"""Extracting lights from an HDRI: up to k compact bright sources as distant lights, 9 SH
-terms for the rest (k = 1 is the old Split Sun: the sun as a Sun light).
+"""Extracting lights from an HDRI: up to k compact bright sources as distant (Sun) lights, the
+9 SH terms for the rest (k = 1: the sun as a Sun light).
 
-Nine terms blur every small bright source into a broad lobe and ring behind it
-(docs/reference.md §2); a sun, a window or a softbox is better rendered as a real light
-(sharp falloff, shadows). The extraction is greedy. On the luminance Y (RGB weights of the
-pixels' space, Rec.709's by default) of an equirect map (rows top to bottom, Blender's
-mapping, see ``equirect``), with b the solid-angle-weighted median of Y over the sphere (the
-map's background level) and P_Y = Σ Y dΩ its luminance power:
-
-1. the peak is the brightest texel of what is left; there is no source unless
-   Y_peak ≥ ``contrast`` × b;
-2. the source is the set of texels connected to the peak (8-neighbours, wrapping around in
-   longitude and across the poles) with Y > max(``contrast`` × b, ``peak_fraction`` × Y_peak);
-3. it is taken only if every texel lies within ``max_radius`` of its centre (a compact
-   source; suns clipped flat in the HDRI have their peak anywhere in the disc), its power is
-   at least ``min_power_fraction`` × P_Y, and taking it lowers the mean error of SH + lights
-   against brute force (eq. 1);
-4. its texels become min(L, B) per channel, B the per-channel median of the texels around it;
-
-and this repeats until ``count`` sources are out, none is left (``Extraction.stop`` says why),
-or the mean error is at most ``error_target``.
-
-Each source becomes a distant light: a Blender Sun of angular diameter 2 arccos(1 − Ω/2π)
-(Ω the region's solid angle). What it carries is exactly what was taken out of the map,
-the excess texels X = L − min(L, B). Their irradiance at a normal n that sees the whole source
-is Σ X (n·ω) dΩ = n·m with m = Σ X ω dΩ (per channel), so the light points along
-s = m_Y/|m_Y| (luminance) and its irradiance facing it is S·C = m·s per channel, which makes
-rest + light equal to the map's irradiance wherever the source is fully above the horizon
-(near its horizon the light's disc and the texels' shape differ; a 10° source spreads over
-±5° there). The SH coefficients are those of the remaining map, so nothing is counted twice:
-E(n) ≈ E_9(rest) + Σ_k S_k C_k max(n·s_k, 0). A Blender Sun of strength S and colour C gives
-irradiance S·C on a surface facing it: ``strength`` and ``colour`` are set so that S·C is that
-irradiance, with max(C) = 1.
-
-Large sources are Sun lights too (a distant disc is what the world is: an area light would
-give a position-dependent irradiance and so not equal the world's).
-
-Errors are |E − E_ref| over the normals as a fraction of each channel's power (the paper's
-measure), the worst channel's; a channel without light (P ≤ 0: a map with no blue, a black
-map) has no relative error and is left out, so such maps extract like any other.
+Greedy on the luminance Y: the brightest texel above ``contrast`` × the median level b, its
+8-connected region above max(contrast · b, peak_fraction · Y_peak), taken when compact, strong
+enough and lowering the error; its excess X = L − min(L, B) becomes a Sun along
+s = m_Y/|m_Y|, m = Σ X ω dΩ, with S·C = m·s and angular diameter 2 arccos(1 − Ω/2π). So
+E(n) ≈ E_9(rest) + Σ_k S_k C_k max(n·s_k, 0), nothing counted twice. Steps: docs/modules.md.
 """
 
 import numbers

@@ -1,33 +1,12 @@
 """The exact minimum and maximum of the 9-term irradiance E(n) over the unit sphere.
 
-With n = (x, y, z, 1) the 9-term irradiance is the quadratic form E(n) = nᵀ M n of eq. 12,
-per colour channel. Splitting M into its upper-left 3×3 block A, the first three entries b of
-its last column and its corner c = M₃₃ = c4 L00 − c5 L20, and writing v = (x, y, z):
-
-    E(v) = vᵀ A v + 2 bᵀ v + c,    |v| = 1.
-
-Minimising it is the trust-region subproblem on the sphere, solved here exactly.
-
-* At a minimiser, (A − λI) v = −b for a Lagrange multiplier λ ≤ d₁, the smallest eigenvalue of
-  A (so A − λI is positive semi-definite); this is both necessary and sufficient for a global
-  minimum on the sphere.
-* In the eigenbasis A = Q diag(d₁ ≤ d₂ ≤ d₃) Qᵀ, β = Qᵀ b, the multiplier is the root of the
-  secular equation f(λ) = Σ β_i² / (d_i − λ)² = 1 on λ < d₁, where f increases from 0 to ∞.
-  Since every d_i − λ ≥ d₁ − λ, f(d₁ − |b|) ≤ 1, and f(d₁ − |β₁|) ≥ 1: the root is bracketed
-  in [d₁ − |b|, d₁ − |β₁|] and found by safeguarded Newton steps on 1/√f − 1 (nearly linear in
-  λ) with bisection as fallback.
-* The "hard case": β has no component along d₁'s eigenvectors (b ⟂ them, including b = 0) and
-  f stays ≤ 1 up to d₁. Then λ = d₁ and v = −Σ_{d_i>d₁} β_i/(d_i − d₁) q_i + τ q₁ with τ chosen
-  to make |v| = 1 (either sign of τ: the minimiser is not unique).
-* Certificate: for every λ < d₁ (or λ = d₁ when β₁ = 0), the Lagrangian dual
-  g(λ) = λ + c − Σ β_i² / (d_i − λ) is a lower bound of E on the sphere, and for this problem
-  there is no duality gap (the S-lemma). Each result carries E at the returned unit vector (an
-  attained value, hence an upper bound of the minimum) and g at the returned λ (a lower bound):
-  their difference bounds the error, and is at rounding level in practice (≤ 2e-13 of the
-  data's scale in a stress test of 3000 near-degenerate cases). A part of b along the lowest
-  eigenvectors below ``ZERO`` × scale is treated as 0 (the hard case), to that tolerance.
-
-The maximum is minus the minimum of −E. Directions are unit vectors in Blender world axes.
+E(v) = vᵀ A v + 2 bᵀ v + c on |v| = 1 (eq. 12 split: A the 3×3 block of M, b its last column,
+c = c4 L00 − c5 L20), per channel: the trust-region subproblem, solved exactly. In A's
+eigenbasis (d₁ ≤ d₂ ≤ d₃, β = Qᵀ b) the multiplier λ < d₁ is the root of
+Σ β_i² / (d_i − λ)² = 1, bracketed in [d₁ − |b|, d₁ − |β₁|] (safeguarded Newton); the hard
+case β₁ = 0 takes λ = d₁. The dual g(λ) = λ + c − Σ β_i² / (d_i − λ) is a lower bound with
+no gap (S-lemma): each result carries both bounds. The maximum is −min(−E). Details:
+docs/modules.md.
 """
 
 from dataclasses import dataclass

@@ -1,19 +1,9 @@
 """Blender's mirror-ball environment mapping and the lighting coefficients of a mirror-ball image.
 
-Convention (Cycles' Environment Texture, projection "Mirror Ball"; checked by rendering the
-world with a panoramic camera, see tests/blender/world/test_world.py): the image is a chrome ball
-photographed from −Y looking along +Y, z up. With x = 2u − 1 and z = 2v − 1 (u, v in [0, 1],
-v from the bottom), a point of the unit disk is the ball normal n = (x, −s, z), s = √(1 − x² − z²),
-and it shows the direction the view ray (0, 1, 0) is reflected to:
-
-    d = (2 s x, 1 − 2 s², 2 s z)
-
-so the ball centre shows −Y (back towards the camera) and the rim shows +Y (behind the ball).
-The map is equal-area: a patch of the disk of area dA (in x, z units) covers dΩ = 4 dA, so the
-whole disk (area π) covers 4π.
-
-Arrays handed in are ``(H, W, C)`` with rows top to bottom, like the rest of the core; texels
-whose centre lies outside the disk carry no light (a mirror-ball photograph's corners).
+Cycles' "Mirror Ball": a chrome ball seen from −Y along +Y, z up. With x = 2u − 1, z = 2v − 1
+(v from the bottom), the disk point is the normal n = (x, −s, z), s = √(1 − x² − z²), and shows
+the reflected direction d = (2 s x, 1 − 2 s², 2 s z): the centre −Y, the rim +Y. The map is
+equal-area, dΩ = 4 dA. Rows top to bottom; texels outside the disk carry no light.
 """
 
 import numpy as np

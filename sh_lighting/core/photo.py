@@ -1,46 +1,12 @@
 """Lighting from a photo of a grey (diffuse) ball: the nine L_lm by linear least squares.
 
-A Lambertian ball of albedo ρ shows the radiance ρ E(n) / π at normal n (eq. 1), and the
-9-term irradiance E(n) = Σ Â_l L_lm Y_lm(n) (eq. 6-7, the quadratic polynomial of eq. 13) is
-linear in the nine L_lm: each pixel inside the ball's circle is one linear equation, per
-colour channel. Normals come from ``ball_camera.ball_normals`` (orthographic or perspective).
-
-What a single photo cannot give: only the normals facing the camera are seen. A quadratic on
-the sphere is fixed by any open patch, but extrapolating it from a hemisphere (less a rim
-margin) is badly conditioned: the unseen side can be far off and negative. The unseen side is
-therefore filled by a *prior* the user chooses, added as pseudo-observations on unseen normals
-(``sh.spread_normals`` farther than 1.5 lattice spacings from every seen normal) with a total
-weight of at most ``prior_weight`` × the pixels', halved until the prior moves the seen
-picture by at most ``PRIOR_HEADROOM`` (a guessed prior) or ``MEASURED_HEADROOM`` (a chrome
-ball, a second photo) × the nine-term misfit (√(residual² − noise²), at
-least ``RESIDUAL_FLOOR``; the noise from the pixels' second differences), so the prior
-decides only what the photo leaves open; the weight used is reported:
-
-* "mirror": the seen side mirrored through the plane perpendicular to the view axis (the
-  value at n is the plain fit's at n − 2 (n·w) w, w towards the camera; where that mirror
-  image is unseen too, the seen side's mean);
-* "ambient": the seen side's mean irradiance, a constant;
-* "chrome": a chrome ball's nine L_lm (a mirror-ball image of the same place,
-  ``mirror_ball.project_mirror_ball``), scaled per channel to the grey ball's pixels (least
-  squares on the seen normals: the chrome ball's reflectance and exposure are unknown); its
-  picture is the value on the unseen normals;
-* "photo": a second photo of the same ball from another side (same albedo and exposure, its
-  own ``PhotoFit``): the joint least-squares fit of both photos' pixels gives the value on the
-  normals the first photo does not see;
-* "none": no prior (the plain least-squares fit).
-
-Then the fit is kept from negative light: while the exact minimum of E over the sphere
-(``minimum.irradiance_minimum``) is below 0 in a channel, a strong observation E = 0 at that
-minimum's normal is added and the channel refitted (at most ``NEGATIVE_STEPS`` times), and
-what is left below 0 is lifted by a constant (L00 + deficit / c4);
-``negative_light_warning`` of the result is reported (None when it never goes negative).
-
-The report (``PhotoFit``) gives: the residual (RMS of the used pixels against the best
-nine-term picture, the plain fit, relative to their mean: a few % for a matte ball; large
-when the ball is not diffuse, the circle is off or the photo is clipped), the condition number
-of the fit (of the column-equilibrated design matrix), the terms the photo constrains poorly
-(singular vectors with σ/σ_max < ``WEAK_SINGULAR``, by name), pixels used, clipped and
-non-finite pixels left out.
+A Lambertian ball of albedo ρ shows ρ E(n) / π at normal n (eq. 1), and the 9-term
+E(n) = Σ Â_l L_lm Y_lm(n) (eq. 6-7) is linear in L_lm: each pixel is one equation per channel.
+One photo sees only the normals facing the camera, so the unseen side comes from a prior the
+user chooses (mirror, ambient, a chrome ball, a second photo, none), weighted to move the seen
+picture by at most a fraction of the nine-term misfit; negative light is then removed at the
+exact minimum of E. ``PhotoFit`` reports residual, condition, weak terms and clipped pixels.
+The priors and the report in detail: docs/modules.md.
 """
 
 from dataclasses import dataclass

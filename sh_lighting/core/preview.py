@@ -1,17 +1,10 @@
 """Small numpy images for the lighting panel: the 9 basis functions and the current irradiance.
 
-Every image is an RGBA float32 array (size, size, 4) or (height, width, 4), **rows top to
-bottom** (Blender's ``ImagePreview.image_pixels_float`` and ``Image.pixels`` run bottom row
-first: the Blender layer flips them), with display-ready values in [0, 1] (already encoded for
-an sRGB display, as Blender's 'Standard' view transform would show them).
-
-The sphere view: an orthographic view of the unit sphere from Blender's front view, the camera
-on −Y looking toward +Y, +Z up and +X to the right. The pixel at row r, column c has image
-coordinates sx = 2(c + ½)/size − 1 (right), sz = 1 − 2(r + ½)/size (up) and, inside the disc,
-the normal n = (sx, −√(1 − sx² − sz²), sz): the middle of the image faces the viewer (−Y), its
-top +Z, its right +X. Alpha is the disc's coverage of the pixel (an anti-aliased edge); pixels
-straddling the rim use the nearest rim normal. Normals and basis values are cached per size,
-so an irradiance preview costs one (size², 9) × (9, 3) product and the sRGB encoding.
+RGBA float32, rows top to bottom, display-ready sRGB values in [0, 1]. The sphere is seen
+orthographically from Blender's front view (−Y toward +Y, +Z up): pixel (r, c) has
+sx = 2(c + ½)/size − 1, sz = 1 − 2(r + ½)/size and normal n = (sx, −√(1 − sx² − sz²), sz);
+alpha is the disc's coverage. Normals and basis values are cached per size, so an irradiance
+preview is one (size², 9) × (9, 3) product and the sRGB encoding.
 """
 
 from functools import lru_cache

@@ -1,24 +1,11 @@
 """Prefiltering: L_lm = ∫ L(ω) Y_lm(ω) dω of an equirectangular map (eq. 10).
 
-The map is taken as piecewise constant over its texels and every Y_lm is integrated exactly
-over every texel's area, not sampled at its centre. Each real SH separates as
-
-    Y_lm(θ, φ) = K_lm P_l^|m|(cos θ) · {1, cos mφ, sin |m|φ},
-
-so the integral over texel (i, j) is a row weight times a column weight:
-
-* row weight   w_l|m|[i] = ∫ K_lm P_l^|m|(cos θ) sin θ dθ over row i. The integrand is a
-  trigonometric polynomial of degree l + 1 in θ, integrated to rounding by a Gauss-Legendre
-  rule of far higher degree (checked against its closed-form antiderivative);
-* column weight ∫ cos mφ dφ = (2 sin(m h) / m) cos(m φ_j) with h = π/W (sin likewise).
-
-The sum over texels is done in two steps: each row against the column weights of every
-(m, cos/sin) pair, then those (H, 2L+1) sums against the row weights. The first step is the only
-one that touches every texel: blocks of rows are cast to float64 (whatever the input dtype) and
-multiplied by the column weights, a few rows per matrix product so that each product is small
-enough for BLAS to run it on one core, while the rows are shared out between threads (numpy
-releases the GIL), one band of rows per core. A constant map therefore gives exactly
-L00 = 2√π c and zeros elsewhere (to rounding), and replicating texels does not change the result.
+The map is piecewise constant over its texels and each Y_lm is integrated exactly over each
+texel: Y_lm(θ, φ) = K_lm P_l^|m|(cos θ) · {1, cos mφ, sin |m|φ} separates into a row weight
+∫ K_lm P_l^|m|(cos θ) sin θ dθ (Gauss-Legendre, exact for this degree) and a column weight
+∫ cos mφ dφ = (2 sin(m h) / m) cos(m φ_j), h = π/W. Rows against the column weights in float64
+blocks shared between threads (one band of rows per core), then against the row weights: a
+constant map gives exactly L00 = 2√π c.
 """
 
 import os

@@ -1,15 +1,9 @@
 """Real spherical harmonics Y_lm in the paper's convention (Ramamoorthi and Hanrahan 2001, eq. 3).
 
-Conventions (docs/reference.md §1):
-
-* real SH without the Condon-Shortley phase, so Y_11 = +sqrt(3/4π) x;
-* coefficient index ``l*(l+1) + m``: Y00, Y1-1, Y10, Y11, Y2-2, ... ;
-* m > 0 carries cos(mφ), m < 0 carries sin(|m|φ), with φ = atan2(y, x) and z = cos θ;
-* directions are unit vectors in Blender world axes (z up).
-
-``sh_basis`` evaluates bands 0-2 from the paper's closed forms and higher bands with the
-associated-Legendre recurrence; ``sh_basis_recurrence`` evaluates every band with the
-recurrence and is kept as the slow reference the fast path is tested against.
+Real SH without the Condon-Shortley phase (Y_11 = +√(3/4π) x), index l(l+1) + m, m > 0 with
+cos(mφ), m < 0 with sin(|m|φ), φ = atan2(y, x), z = cos θ, Blender world axes
+(docs/reference.md §1). ``sh_basis`` uses the paper's closed forms for bands 0-2 and the
+associated-Legendre recurrence above; ``sh_basis_recurrence`` is the slow reference.
 """
 
 from math import factorial, pi, sqrt

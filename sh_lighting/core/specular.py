@@ -1,23 +1,11 @@
 """GGX-prefiltered specular radiance from an equirectangular image (glTF environment export).
 
-A glossy surface lit by an environment reflects, in the mirror direction R, the radiance
-prefiltered with its microfacet distribution. With the split-sum approximation and n = v = R
-(Karis, "Real Shading in Unreal Engine 4", SIGGRAPH 2013 course notes, eq. 4 and its
-"n = v = r" assumption), the prefiltered radiance at roughness α (α = GGX's α, the
-square of a material's perceptual roughness) is
-
-    P_α(R) = ∫ L(ω) D_α(h) max(R·ω, 0) dω / ∫ D_α(h) max(R·ω, 0) dω,   h = (R + ω)/|R + ω|,
-
-with D_α the GGX (Trowbridge-Reitz) distribution α² / (π ((R·h)² (α² − 1) + 1)²); here
-(R·h)² = (1 + R·ω)/2, so only R·ω is needed. It is evaluated as a deterministic sum over the
-texels of the image, box-downsampled (each texel's radiance weighted by its exact solid angle)
-to ``SOURCE_TEXELS_PER_TEXEL`` × the output resolution. For α no larger than a texel of the
-output (the sharpest level) the sum is replaced by the mean of the full image over each output
-texel, which is what a mirror shows at that resolution: the solid-angle-weighted mean of the
-image texels inside it (``scatter_average``) when the image is finer than the output, else
-the mean of bilinear lookups at k × k points of it (``bilinear_lookup``). Pure numpy;
-directions are Blender world axes (z up), pixels rows top to bottom (``equirect``).
-``benchmarks/bench_specular.py`` measures the cost.
+With the split sum and n = v = R (Karis 2013, eq. 4), the radiance prefiltered at GGX α is
+P_α(R) = ∫ L(ω) D_α(h) max(R·ω, 0) dω / ∫ D_α(h) max(R·ω, 0) dω, h = (R + ω)/|R + ω|,
+D_α = α² / (π ((R·h)² (α² − 1) + 1)²), (R·h)² = (1 + R·ω)/2: a deterministic sum over the image
+box-downsampled to ``SOURCE_TEXELS_PER_TEXEL`` × the output. For α within a texel of the output
+it is the mean of the image over each output texel (``scatter_average``, ``bilinear_lookup``).
+Blender world axes; rows top to bottom.
 """
 
 from math import pi

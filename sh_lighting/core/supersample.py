@@ -1,15 +1,10 @@
 """Refining small, very bright features of a rendered equirectangular capture.
 
-A panorama rendered with a few samples per pixel estimates each pixel's average radiance by
-point samples; a feature much smaller than a pixel but very bright (the sun of a Sky Texture:
-0.545° wide, ~85% of the sky's light) is then hit by too few samples, and its light is off by
-tens of percent. The Blender layer re-renders only the pixels around such features at a
-higher resolution; this module finds those pixels and averages the finer render back into
-them, weighting each finer row by its exact solid angle, so the refined map is still the
-per-texel average radiance that ``project_equirect`` integrates exactly.
-
-Rows are top to bottom and columns follow Blender's equirect layout (see ``equirect``);
-columns wrap around (column W−1 is next to column 0), rows do not.
+A feature much smaller than a pixel but very bright (a Sky Texture's sun: 0.545° wide, ~85 %
+of the light) is hit by too few point samples. The Blender layer renders the pixels around it
+again, finer; this module finds those pixels and averages the finer render back into them,
+each finer row weighted by its exact solid angle, so the map stays the per-texel mean that
+``project_equirect`` integrates. Rows top to bottom; columns wrap around, rows do not.
 """
 
 import numpy as np

@@ -1,24 +1,12 @@
 """∫ max(n·ω, 0) dω over one latitude-longitude texel in closed form: the kernel of the exact
-irradiance E(n) = Σ_t L_t ∫_t max(n·ω, 0) dω of a piecewise-constant map (eq. 1), which
-``irradiance.reference_irradiance`` sums.
+irradiance E(n) = Σ_t L_t ∫_t max(n·ω, 0) dω of a piecewise-constant map (eq. 1).
 
-A texel is z = cos θ in [z_lo, z_hi] times φ in [φ_0, φ_1]. With n = (r cos α, r sin α, n_z),
-n·ω = a + b cos ψ where a = n_z z, b = r √(1 − z²) and ψ = φ − α. The z range is cut where
-the horizon n·ω = 0 touches a latitude circle (z = ±r) and where it crosses the texel's two
-meridians; on each piece:
-
-* outside the band |z| < r the latitude circles lie wholly above the horizon (∫ n·ω dω,
-  ``texel_moments``) or below it (0);
-* inside it, the φ integral is Σ [F(ψ)] over the parts of [φ_0 − α, φ_1 − α] where
-  cos ψ > −a/b, F(ψ) = a ψ + b sin ψ; each part ends at a meridian (F(u) is a z and a
-  √(1 − z²) term) or at ψ = 2πk ± c(z), c = arccos(−a/b) = atan2(√(r² − z²), −a) (no loss of
-  digits near the tangent points), where F = 2πk a ± (a c + √(r² − z²)).
-  Their z integrals are closed forms: ∫ √(r² − z²) dz = (z √(r² − z²) + r² asin(z/r)) / 2 and,
-  by parts (c' = n_z / ((1 − z²) √(r² − z²))),
-  ∫ n_z z c dz = n_z z² c / 2 + n_z² asin(z/r) / 2 − |n_z| atan2(|n_z| z, √(r² − z²)) / 2.
-
-So the kernel is exact up to rounding for any texel and normal, the whole sphere of a 1×1
-map included (where it is π for every n).
+Texel z = cos θ ∈ [z_lo, z_hi], φ ∈ [φ_0, φ_1]; with n = (r cos α, r sin α, n_z),
+n·ω = a + b cos ψ, a = n_z z, b = r √(1 − z²), ψ = φ − α. The z range is cut where the horizon
+touches a latitude circle (z = ±r) or crosses a meridian; the φ integral of each piece is
+F(ψ) = a ψ + b sin ψ between meridians or ψ = ±arccos(−a/b), and its z integral is in closed
+form (∫ √(r² − z²) dz, and ∫ n_z z c dz by parts). Exact to rounding for any texel and normal
+(π for every n on a 1×1 map). Derivation: docs/modules.md.
 """
 
 from math import pi

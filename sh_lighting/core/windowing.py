@@ -1,28 +1,11 @@
 """Band windows for the lighting coefficients: taming the ringing of the 9-term irradiance.
 
-A window is one factor w_l per band, applied as L'_lm = w_l L_lm (so E'_lm = w_l Â_l L_lm,
-eq. 7). Every window here has w_0 = 1 (the mean irradiance, c4 L00, is kept) and
-0 ≤ w_l ≤ 1. Truncating at l = 2 makes E(n) ring: behind a strong small light it goes negative
-(docs/reference.md §2: down to −0.0396 P). Smoothing the higher bands trades sharpness for that.
-
-* ``hanning_window(width)``: w_l = (1 + cos(π l / width)) / 2 for l < width, 0 beyond. The
-  common choice width = L + 1 = 3 gives (1, 3/4, 1/4); width = 2 gives (1, 1/2, 0), the
-  cardioid (1 + n·s)/4 per light, which is non-negative for every non-negative lighting.
-* ``lanczos_window(width)``: w_l = sinc(l / width) = sin(π l/width) / (π l/width) for l < width,
-  0 beyond; width 3 gives (1, 3√3/2π, 3√3/4π).
-* ``minimal_nonnegative_window(coeffs)``: the least smoothing, in the one-parameter family
-  below, that makes E(n) ≥ 0 for every normal and channel, certified by ``minimum.py``.
-
-The family (parameter t ∈ [0, 2], one value for all channels):
-
-    t ∈ [0, 1]: w(t) = (1 − t)·(1, 1, 1) + t·(1, 1/2, 0)   (blend: no window → Hanning width 2)
-    t ∈ [1, 2]: w(t) = (2 − t)·(1, 1/2, 0) + (t − 1)·(1, 0, 0)   (→ ambient only)
-
-The first segment suffices for any lighting that comes from non-negative radiance (its end is
-non-negative for such lighting); the second is for edited, non-physical coefficients (its end
-is the constant c4 L00, positive when L00 > 0). On each segment E_t(n) is affine in t for a
-fixed n, so min_n E_t(n) is concave in t and {t : E_t ≥ 0} is an interval: bisection on it,
-with the exact minimum as the test, finds the smallest t (to ``BISECTION_TOLERANCE``).
+L'_lm = w_l L_lm (E'_lm = w_l Â_l L_lm, eq. 7), w_0 = 1, 0 ≤ w_l ≤ 1. Hanning:
+w_l = (1 + cos(π l / width)) / 2 (width 3: (1, 3/4, 1/4); width 2: (1, 1/2, 0), non-negative
+for non-negative light); Lanczos: w_l = sinc(l / width). ``minimal_nonnegative_window``: the
+least t ∈ [0, 2] in w(t) = (1 − t)(1, 1, 1) + t (1, ½, 0) (t ≤ 1), then toward (1, 0, 0),
+with E_t(n) ≥ 0 for every normal, found by bisection with the exact minimum (``minimum``):
+min_n E_t is concave in t, so {t : E_t ≥ 0} is an interval. Details: docs/modules.md.
 """
 
 from dataclasses import dataclass

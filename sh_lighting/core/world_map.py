@@ -1,26 +1,11 @@
 """An equirect world map as Blender shows it, and how to aim a Blender Sun light.
 
-Blender's world shader reads an Environment Texture through an optional Mapping node (Point,
-XYZ Euler rotation e) and scales it by the Background's Strength s (docs/reference.md §3). With
-R = ``euler_xyz_matrix(e)`` the Mapping node turns the *lookup* direction: the world shows, in
-direction d, the image's radiance at R d, times s:
-
-    L_world(d) = s · L_image(R d).
-
-So the lighting is the image's lighting rotated by Rᵀ (``mapping_rotation``); a feature the
-image holds at direction ω appears in the world at Rᵀ ω (``to_world_direction``); and the
-world's irradiance at a normal n is s · E_image(R n), since
-∫ L_image(R ω) max(n·ω, 0) dω = ∫ L_image(ω') max((R n)·ω', 0) dω' (``map_irradiance``).
-``euler`` None means no Mapping node (R = I).
-
-``equirect_irradiance`` is that brute-force sum (eq. 1, every texel, nothing downsampled):
-``irradiance.reference_irradiance``, which integrates each texel exactly.
-
-A Blender light shines along the −Z axis of its object. ``sun_light_rotation(s)`` is an
-object rotation that takes +Z to the unit direction s toward the sun, so the light shines
-along −s, from the sun toward the scene.
-
-Everything is in Blender world axes (z up); pixels are (H, W, 3 or 4), rows top to bottom.
+With the Mapping node's R = ``euler_xyz_matrix(e)`` and the Background's Strength s, the world
+shows L_world(d) = s · L_image(R d) (docs/reference.md §3): the lighting is the image's rotated
+by Rᵀ (``mapping_rotation``), a feature at ω appears at Rᵀ ω (``to_world_direction``), and the
+irradiance is s · E_image(R n) (``map_irradiance``; ``equirect_irradiance`` the brute-force sum
+of eq. 1). ``sun_light_rotation(s)`` takes the light's +Z to s, so it shines along −s. Blender
+world axes; pixels (H, W, 3 or 4), rows top to bottom.
 """
 
 import numpy as np

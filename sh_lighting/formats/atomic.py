@@ -1,34 +1,12 @@
 """Atomic file writes: a file is either fully written or untouched, never half-written.
 
-``write_text_atomic`` writes the whole text to a temporary file in the destination's folder
-(``.<name>.<12 hex digits><suffix>``, created with O_EXCL so nothing existing is reused),
-flushes it to disk, then moves it over the destination with ``os.replace`` (atomic on POSIX
-and Windows for a file in the same folder). On any error, KeyboardInterrupt included, the
-temporary file is removed and the destination keeps its previous content (or stays absent).
-
-What a replaced file keeps, and where the bytes go:
-
-* its permission bits (a 0600 file stays private, a 0444 one read-only) and, where the
-  system allows it (the same user, or root), its owner and group; a new file gets the
-  permissions the umask gives;
-* a destination that is a symbolic link is written through: the link's target is replaced
-  (the temporary file sits beside the target) and the link stays a link.
-
-An existing destination is only replaced with ``overwrite=True``. Existence is checked before
-writing and again just before the move; a file created by another program between that last
-check and the move is replaced (no portable way to refuse it exists).
-
-``atomic_destination`` hands out such a temporary path for writers that are not plain text
-(e.g. a program that writes the file itself) and does the same checks and the final move.
-
-What a kill leaves: a process killed (SIGKILL, power loss) between creating the temporary
-file and the move leaves that hidden temporary file beside the destination, and the
-destination as it was. The temporary name holds the writer's pid
-(``.<name>.<pid>-<12 hex digits><suffix>``); ``leftovers`` finds those whose writer is
-provably gone (no process with that pid on this machine; an earlier version's name without a
-pid once it is ``OLD_LEFTOVER_AGE`` old) and ``remove_leftovers`` deletes them; the command
-line does so at its next run for the files it writes. A file another run is still writing
-(Blender's in-flight ``.blend@`` included) is never taken.
+``write_text_atomic`` writes a temporary file beside the destination
+(``.<name>.<pid>-<12 hex><suffix>``, O_EXCL), flushes it, and moves it into place with
+``os.replace``; on any error (KeyboardInterrupt included) it is removed. A replaced file keeps
+its permission bits and owner, a symbolic link is written through, and nothing is replaced
+without ``overwrite=True``. ``atomic_destination`` does the same for other writers;
+``leftovers`` / ``remove_leftovers`` find and delete the temporaries of killed writers (pid
+gone). Details: docs/modules.md.
 """
 
 import errno

@@ -1,17 +1,11 @@
 """An OpenEXR file's structure checked before Blender reads it (no bpy, no numpy).
 
-bpy 5.0.1's EXR reader crashes the process (SIGSEGV) on a file whose chunks are cut short,
-as an interrupted copy or download leaves it: ``check_exr`` reads the
-header (magic number, version flags, attributes), the chunk offset table, and each chunk's
-own header, and raises a ValueError of one line when something lies outside the file.
-
-Checked in full: single-part scanline files and single-part tiled files of one level (the
-files HDRI sites, Blender and most tools write). Of multi-part, deep and mip/rip-mapped files
-only the header is checked. The layout followed is the OpenEXR file format's: a 4-byte magic
-number 20000630, a 4-byte version with flags (0x200 tiled, 0x800 deep, 0x1000 multi-part),
-attributes ``name\\0 type\\0 size value`` up to an empty name, then one 8-byte offset per chunk;
-a scanline chunk starts with its y (4 bytes) and data size (4), a tile with 4 coordinates and
-its size (20 bytes).
+bpy 5.0.1's EXR reader crashes (SIGSEGV) on a file whose chunks are cut short. ``check_exr``
+reads the header (magic 20000630, version flags 0x200 tiled, 0x800 deep, 0x1000 multi-part,
+attributes up to an empty name), the chunk offset table and each chunk's header (scanline: y
+and size; tile: 4 coordinates and size), and raises a one-line ValueError when something lies
+outside the file. Single-part scanline and one-level tiled files are checked in full; of
+multi-part, deep and mip-mapped files only the header.
 """
 
 import os

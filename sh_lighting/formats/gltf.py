@@ -1,32 +1,11 @@
 """A complete glTF 2.0 ``EXT_lights_image_based`` environment, as Babylon.js reads it.
 
-One .gltf text (JSON, images embedded as ``data:image/png;base64`` URIs) holding one light
-attached to the scene: ``intensity`` 1, ``rotation`` identity, ``irradianceCoefficients``
-(``interop.to_gltf_irradiance_coefficients``), ``specularImageSize`` and ``specularImages``:
-a cube mip chain of ``levels`` levels of size S, S/2, ... prefiltered from the world image
-(``core.specular``). The facts it follows (the extension's README and schema, Babylon.js 9.28's
-loader and shaders; checked by running them in node, ``tests/interop``):
-
-* **Faces** are listed +X, −X, +Y, −Y, +Z, −Z in the axes Babylon looks the cube up with:
-  in a right-handed scene (x, y, −z) of the glTF world direction, i.e. (x, z, y)_blender
-  (``interop.BLENDER_TO_BABYLON_LOOKUP``; the same axes as the irradiance coefficients).
-  Inside a face, texel (column i, row j) of size s is the WebGL cube-map direction of
-  s_c = 2(i + ½)/s − 1 and t_c = 1 − 2(j + ½)/s (table 3.21 of the OpenGL ES 3.0 spec;
-  ``FACE_AXES``): Babylon uploads these images with ``UNPACK_FLIP_Y``, so the PNG's top
-  row is t = 1 (what the extension calls flipping each image for glTF's texture space).
-* **Roughness per level**: Babylon samples level lod = log2(S α)·(N − 1)/log2(S) for
-  α = r² + 0.0005 (r the material roughness), so level i holds the radiance prefiltered at
-  α_i = S^(i/(N−1)) / S (``level_alphas``): α = 1/S (mirror-like) at level 0, α = 1
-  (r = 1) at the last. The extension's README says instead that levels "evenly map to
-  roughness values from 0 to 1"; Babylon, its main reader, does not, and we follow Babylon.
-* **Encoding**: 4-channel PNGs hold RGBD (the extension), decoded by Babylon as
-  rgb = (c/255)^2.2 / (d/255); encoded as Babylon's ``toRGBD``: d = clamp(⌊255/max(r, g, b)⌋,
-  1, 255), c = round(255 (L d/255)^(1/2.2)). RGBD holds at most 255: brighter texels (an
-  HDRI's sun) are clipped there in the specular images (the diffuse light, from the
-  coefficients, is not affected); negative radiance is written as 0. ``intensity`` stays 1:
-  Babylon 9.28 multiplies the coefficients by it in its loader and the irradiance by it
-  again in its shader (``vReflectionInfos.x``), so any other value would scale its diffuse
-  light by intensity² but its reflections by intensity.
+One .gltf (PNG images embedded) with one light: intensity 1, the irradiance coefficients
+(``interop``) and a specular cube mip chain prefiltered from the world image
+(``core.specular``): faces in Babylon's lookup axes (x, z, y)_blender, texel (i, j) the WebGL
+direction of s_c = 2(i + ½)/s − 1, t_c = 1 − 2(j + ½)/s; level i at GGX α_i = S^(i/(N−1))/S
+(Babylon's lod = log2(S α)(N − 1)/log2(S)); RGBD-encoded as Babylon's ``toRGBD``
+(rgb = (c/255)^2.2 / (d/255), at most 255). Babylon's conventions: docs/interop.md.
 """
 
 import base64

@@ -1,52 +1,10 @@
-"""Lighting presets: 9 RGB lighting coefficients in a small, strict JSON file.
+"""Lighting presets: the 9 RGB coefficients L_lm in a small, strict JSON file (version 1).
 
-Format (version 1)::
-
-    {
-      "format": "sh_lighting.preset",
-      "version": 1,
-      "frame": "blender_world_z_up",
-      "coefficients": {
-        "L00": [r, g, b], "L1-1": [r, g, b], "L10": [r, g, b], "L11": [r, g, b],
-        "L2-2": [r, g, b], "L2-1": [r, g, b], "L20": [r, g, b], "L21": [r, g, b],
-        "L22": [r, g, b]
-      },
-      "metadata": { ... optional ... }
-    }
-
-* ``coefficients``: raw radiance L_lm = ∫ L(ω) Y_lm(ω) dω (not pre-convolved, not
-  pre-scaled) in the paper's real SH basis (docs/reference.md §1), linear RGB. Exactly the nine
-  names above (the order of keys does not matter), each a list of 3 finite numbers.
-* ``frame``: always ``"blender_world_z_up"`` (Blender world axes, z up, so L10 is the up/down
-  moment). Data in another frame is converted before it is written (``frames.py``); a file
-  naming another frame is refused rather than guessed at.
-* ``metadata`` (optional object) with these documented, optional keys:
-
-  - ``name`` (string): what to show in a list of presets;
-  - ``source`` (string): where the lighting came from (an HDRI path, a paper, ...);
-  - ``mapping`` ([x, y, z] radians, Blender XYZ Euler) and ``strength`` (number): the World's
-    Mapping rotation and Background strength the coefficients were computed with; they are
-    already included in the coefficients and are kept for information only;
-  - ``created`` (string): ISO 8601 date or date-time, e.g. ``"2025-01-31"``;
-  - ``error_estimate`` ({"mean": m, "max": x}): the 9-term irradiance error against the exact
-    irradiance, as a fraction of the total power ∫ L dω (the paper's measure), over a set of
-    normals (mean: worst channel's mean; max: over normals and channels);
-  - ``notes`` (string): free text.
-
-  Other metadata keys are kept as they are (JSON values), so files written by later versions
-  still load; the documented keys are type-checked.
-
-Reading rejects, with a :class:`PresetError` naming the problem and the fix: malformed JSON
-(with line and column), duplicate keys, an unknown ``format``, an unsupported ``version``, an
-unknown ``frame``, unknown top-level keys, missing / extra / misspelt coefficient names,
-channel counts other than 3, values that are not numbers (``true`` is not a number), and
-NaN / Infinity (Python's json module accepts the non-standard literals ``NaN``, ``Infinity``
-and ``-Infinity``, and turns overflowing numbers such as ``1e999`` into infinity: both refused).
-
-Writing is atomic: the text goes to a temporary file in the destination's folder, is flushed to
-disk, then moved over the destination with ``os.replace``; on any error the temporary file is
-removed and the destination is untouched. An existing file is only replaced with
-``overwrite=True``.
+{"format": "sh_lighting.preset", "version": 1, "frame": "blender_world_z_up", "coefficients":
+{"L00": [r, g, b], ..., "L22": [r, g, b]}, "metadata": {...}}: raw radiance
+L_lm = ∫ L(ω) Y_lm(ω) dω in the paper's real basis, Blender world axes, linear RGB. Reading
+refuses anything else (bad JSON, unknown keys or frame, NaN, Infinity, 1e999) with one
+``PresetError`` naming the problem; writing is atomic. Fields and refusals: docs/formats.md.
 """
 
 import json

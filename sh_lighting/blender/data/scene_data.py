@@ -1,49 +1,12 @@
 """Where a scene keeps its SH lighting, and ``store``: the one function that writes it.
 
-Plain custom properties, readable without the add-on (docs/reference.md §3: an Attribute node of
-type View Layer reads them at render time in any Blender, so a saved .blend renders the same
-on a render farm); all are keyframable and undoable like any property:
-
-* ``scene["sh_L00"]`` ... ``scene["sh_L22"]``: c_lm, one RGB triple per coefficient;
-* ``scene["sh_L00_gain"]`` ... ``scene["sh_L22_gain"]``: s_lm, one float per coefficient
-  (1 after every ``store``), the row's strength an artist drags or keyframes;
-* the lighting is their product L_lm = s_lm · c_lm (raw radiance, Blender world axes):
-  the node group multiplies them, ``get_coefficients`` returns the products;
-* ``scene["sh_computed"]`` (27 floats): the values last computed from the world (Reset),
-  ``scene["sh_computed_provenance"]`` their provenance;
-* ``scene["sh_provenance"]``: where the stored values came from, recorded when known by the
-  writer (``store``), never guessed afterwards: a dict with "source" ("WORLD", "PRESET",
-  "SCRIPT", "PHOTO") and what is known of it (world and image, preset name and path, ...), plus
-  "edit" (the last design edit) once the values were edited by a design tool.
-
-``store(scene, coeffs, provenance)`` validates, writes c = coeffs and s = 1, records the
-provenance (and, for "WORLD", the Reset values), gives the properties their UI data (a
-description, soft limits following the values so that a drag is not too coarse), tags the
-scene for the depsgraph and redraws the panels. Every writer of the coefficients calls it.
-A field edit or keyframe changes a property directly (Blender tags the scene itself); a
-Python script writing ``scene["sh_L10"] = ...`` must call ``scene.update_tag()`` afterwards
-for open viewports to see it (a render always reads the current values).
-
-Animated properties (the policy's checks are in ``animated``). A value written over a keyframed or driven property
-is what Blender shows until the next frame change, when the animation overrides it: the
-write would be undone. So ``store`` looks at every property it writes and follows its
-``animation`` policy (``ANIMATION_POLICIES``) when one is animated (an F-curve of the
-scene's action or of its NLA strips, or a driver, on ``scene["sh_..."]``):
-
-* "KEY" (the default of the add-on and the API): the new value is also keyframed at the
-  current frame, so that it is what renders at that frame and the rest of the animation is
-  kept (Blender's auto-keying does the same). A driven property cannot be keyed (the driver
-  overrides any key): refused, naming the property and its driver;
-* "CLEAR": the property's F-curves and drivers are removed first (the user's consent: the
-  command line's ``--animation clear``), so the value renders at every frame;
-* "REFUSE" (the command line's default): an ``AnimatedError`` naming the property, nothing
-  changed.
-
-``store`` returns the values it wrote as a ``Stored`` array whose ``note`` says what it did
-about animation ("keyed at frame 12 because sh_L10_gain is animated"; "" if nothing), for
-the operators' reports. ``store(..., gains="KEEP")``
-(the design edits, when a gain is animated) writes the channels c only and leaves the gains
-and their animation alone: L = s(t) · c' at every frame.
+Custom properties that an Attribute node reads at render time in any Blender: c_lm in
+``scene["sh_L00"]`` ... ``["sh_L22"]`` (RGB), the gains s_lm in ``["sh_L00_gain"]`` ..., the
+lighting L_lm = s_lm · c_lm; ``["sh_computed"]`` the Reset values, ``["sh_provenance"]`` where
+the values came from. ``store`` validates, writes c = coeffs and s = 1 (or c only, ``gains=
+"KEEP"``), follows the ``animation`` policy (KEY, CLEAR, REFUSE) over animated properties,
+records the provenance, tags the depsgraph, and returns a ``Stored`` array whose ``note`` says
+what it did about animation. The properties and the policy in detail: docs/modules.md.
 """
 
 import bpy

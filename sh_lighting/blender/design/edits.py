@@ -1,15 +1,10 @@
 """Lighting design on a scene's coefficients: plain functions for the operators and the API.
 
-Each function takes the scene (never ``bpy.context``), reads its coefficients
-(``scene_data.get_coefficients``: a LookupError when there are none), lets the core compute,
-and stores the result with ``scene_data.store`` (provenance: where the values came from,
-with the edit; edits are not new Reset values). Errors are ValueError/LookupError with a message for the user; nothing is changed
-then. Angles are in radians, like everywhere in Blender's Python API.
-
-The world-reading tools (Match Mapping, the window's error against the world) need
-the world's Environment Texture image: they read it with ``reader.read_world``, the reader
-Compute from World uses, so they see exactly what it sees (Strength and rotation as
-evaluated at the current frame, pixels decoded as Blender renders them).
+Each takes the scene (never ``bpy.context``), reads its coefficients (a LookupError without
+any), lets the core compute and stores the result with ``scene_data.store`` (provenance with
+the edit; edits are not Reset values). Errors are ValueError/LookupError with a message for
+the user, nothing changed; angles in radians. Match Mapping and the window's error read the
+world image with ``reader.read_world``, as Compute from World does.
 """
 
 import math

@@ -1,30 +1,13 @@
 """Extract Lights: the world image's compact bright sources as Blender Sun lights, SH for the
-rest (``core.lights``; one light is what Split Sun was).
+rest (``core.lights``).
 
-``extract_lights(scene, count, error_target, size_limit)`` reads the world's equirect
-Environment Texture (``reader.read_world``: the Background's Strength and the Mapping node's
-rotation as evaluated at the current frame, the pixels decoded as Compute from World sees
-them), takes up to ``count`` sources out, makes one Sun light per source (aimed along the
-source's direction in the world, angle from its size, colour and strength from its texels ×
-Strength) and stores the coefficients of the world without them, as the current values and as
-the Reset values (Reset then keeps the lights out of the SH). The lights are ordinary objects
-(move, retint, delete them; all undoable) in a collection of their own, "SH Lights (<image>)",
-placed ``DISTANCE`` from the 3D cursor along their direction, where they are easy to find.
-
-Which lights are the add-on's: the scene's ``REGISTRY`` property holds pointers to the objects
-(and the collection) it made. A pointer follows its object through renames, save and reload,
-and a duplicate (Shift+D) is not pointed to, so an artist's copy is never changed or deleted;
-nor is a light linked from a library. A new extraction updates the registered lights in place
-and deletes the ones no longer needed, and Compute from World (which stores the whole world's
-coefficients again) deletes them (``remove_lights``): a light is never counted twice. Files
-saved before the registry marked the lights with ``LEGACY_MARKERS`` (Extract Lights' index,
-Split Sun's flag); such a light is taken as the add-on's only when its name is one the Reset
-values' provenance records, which a duplicate's name is not.
-
-The world itself keeps the sources (the background and, in Apply mode KEEP_BSDF, the glossy
-and transmission reflections of the world still show them), so the lights are made invisible
-to glossy and transmission rays: in Cycles they then light diffuse closures only, replacing
-what was taken out of the SH, and a glossy surface does not reflect a source twice.
+``extract_lights`` reads the world's equirect image as Compute from World does, makes one Sun
+per source (aimed along it, angle from its size, colour and strength from its texels ×
+Strength) in a collection "SH Lights (<image>)", and stores the rest as the current and Reset
+values. The add-on's lights are those the scene's ``REGISTRY`` pointers name (a Shift+D copy
+is not): a new extraction updates them, Compute from World deletes them. They are invisible to
+glossy and transmission rays (the world still shows the sources there). Details:
+docs/modules.md.
 """
 
 import time

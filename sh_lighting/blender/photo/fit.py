@@ -1,24 +1,11 @@
 """Match Photo: the scene's lighting from a photo of a grey ball (``core.photo``), stored.
 
-The photo is read the way Blender renders it (``world.images.linear_pixels``: an 8-bit sRGB
-PNG or JPEG decoded as Cycles decodes it; EXR, HDR and 16-bit PNG as the float values Blender
-loads), then fitted by ``core.photo.fit_photo`` and stored with ``scene_data.store`` under
-provenance "PHOTO" (file, circle, camera, fit report).
-
-Clipped pixels: in an 8-bit file, a texel with a byte of 255 in a channel; in a 16-bit PNG
-(or another integer format Blender loads as float), a channel at 1.0, the file's top code;
-in EXR and HDR files only above ``clip`` when one is given (light has no top there).
-
-The camera: a camera object (the scene's by default: the photo taken from it), its
-orientation, ORTHO or PERSP, lens and sensor (Blender's sensor fit); or a view direction and
-roll with a projection given here (``core.ball_camera.camera_looking``).
-
-Both balls: a chrome ball is a mirror-ball image (``world.hdri.read_hdri``, projection
-"mirror_ball"), or the scene's world when that is one (read as the add-on reads any world,
-Environment Texture projection Mirror Ball). It is the prior "chrome" for the unseen side, and
-``exposure_match`` compares the grey ball's fit with it (``core.photo.match_exposure``). A
-second photo (``SecondPhoto``) is read and fitted like the first, prior "none", for the
-prior "photo".
+The photo is read as Blender renders it (``world.images.linear_pixels``), fitted by
+``core.photo.fit_photo`` and stored under provenance "PHOTO". Clipped pixels: a byte of 255
+(8-bit), 1.0 (16-bit PNG), above ``clip`` (EXR, HDR). The camera: a camera object (the scene's
+by default) or a view direction and roll. A chrome ball (a mirror-ball image, or the world when
+it is one) is the prior "chrome" and ``exposure_match`` compares the fit with it; a
+``SecondPhoto`` is the prior "photo".
 """
 
 import os

@@ -1,42 +1,11 @@
 """Presets on disk: export and import a scene's coefficients, shipped and user presets.
 
-Plain functions for the operators (``presets_ui``), the command line (``sh_lighting.cli``) and
-scripts (``sh_lighting.api``); none reads ``bpy.context``: the scene is an argument.
-
-Formats written by :func:`export_preset` (``FORMATS``), every one atomically (a temporary file
-moved into place, ``core.atomic``) and never over an existing file unless ``overwrite=True``:
-
-* ``"sh_lighting"``: our preset JSON (``core.presets``: raw L_lm, Blender axes), with metadata;
-* ``"threejs"``: a three.js object JSON holding one ``LightProbe`` (what
-  ``new ObjectLoader().parse(json)`` reads; ``json.object.sh`` feeds
-  ``SphericalHarmonics3.fromArray``): radiance L_lm, y-up glTF frame (``core.interop``);
-* ``"gltf"``: a .gltf file of one complete ``EXT_lights_image_based`` environment: the
-  irradiance coefficients as Babylon.js reads them and a specular cube mip chain prefiltered
-  from the world image (``world_environment``), or from the 9-term lighting itself when the
-  coefficients are not the ones computed from an equirect world image
-  (``core.gltf_environment``);
-* ``"filament"``: cmgen ``sh.txt`` text, 9 lines of shader-ready (pre-scaled) values, no
-  windowing, in cmgen's frame (default) or the glTF frame (``FILAMENT_FRAMES``).
-
-Every format holds linear Rec.709 RGB (``EXPORT_SPACE``): ``export_coefficients`` converts
-from the file's working colour space in one place (``to_export_space``), and importing
-converts a preset into it (``from_preset_space``).
-
-Importing reads our JSON format only; the coefficients become the scene's current values.
-They do **not** become the Reset values: Reset keeps meaning "the values last computed from
-the world" (its tooltip says so), and Undo returns to the values before the import.
-
-Metadata of an exported preset: ``created`` (today), ``name`` (the file's stem unless given)
-and, when the scene's coefficients are exactly the ones last computed from the world and that
-world was an Environment Texture read directly, ``source`` (the image file), ``mapping`` and
-``strength`` as the world reader saw them then (the provenance Compute from World stored). Anything else is not known from a scene and is omitted (callers that know more,
-such as ``sh_lighting.cli compute`` with its error estimate, pass ``metadata``).
-
-Shipped presets are the package's ``presets`` folder once installed (``tools/package.py``
-copies them there), else the repository's ``presets`` folder beside the package. User presets
-are JSON files in Blender's user preset folder for this add-on,
-``<user scripts>/presets/sh_lighting`` (``bpy.utils.user_resource``), named by a sanitised
-version of the preset's name; removing one never touches the shipped folder.
+Plain functions (the scene an argument, never ``bpy.context``) for the operators, the command
+line and the API. ``export_preset`` writes our JSON, three.js, glTF (with a specular cube from
+the world image) or Filament's sh.txt (``FORMATS``), atomically, in linear Rec.709
+(``to_export_space``); ``import_preset`` reads our JSON into the scene's current values (not
+the Reset values). Shipped presets: the package's ``presets`` folder; user presets:
+``<user scripts>/presets/sh_lighting``. Formats and metadata in detail: docs/modules.md.
 """
 
 import json

@@ -1,20 +1,11 @@
 """Which shaders make up a material's surface, with the weight each is mixed in at.
 
-``surface_leaves`` walks the Material Output's Surface through reroutes, Mix Shader and Add
-Shader nodes down to the shaders they combine. A Mix Shader renders (1 − Fac) · Shader 1 +
-Fac · Shader 2, so each leaf carries the path of mix factors that scales it (``Leaf.path``):
-the SH term of a leaf is scaled by the same factors (a Mix 0.5 of a Principled and a black
-Emission gets half the SH term, a Mix with a Transparent BSDF as much less as the
-Transparent takes). A shader reached along two paths is two leaves. Muted links count as
-absent; a muted Mix or Add Shader passes its first shader input on (Blender's internal
-link), a muted shader renders nothing.
-
-A material has a diffuse part when a leaf is a Principled BSDF or a Diffuse BSDF; shaders
-without one (``NO_DIFFUSE_SHADERS``) are left out of the sum; any other leaf (a node group,
-Subsurface Scattering, Toon, ...) is one whose diffuse colour this module cannot read, and
-the material is refused with its name rather than given some other node's colour.
-
-Reroutes are looked through by ``node_links.source_socket``, the project's one walker.
+``surface_leaves`` walks the Surface through reroutes, Mix and Add Shaders to the shaders they
+combine; a Mix renders (1 − Fac) · Shader 1 + Fac · Shader 2, so each leaf carries its path of
+factors (``Leaf.path``), which scale its SH term too. Muted links are absent, a muted Mix or
+Add passes its first input. Principled and Diffuse BSDFs have a diffuse part,
+``NO_DIFFUSE_SHADERS`` none; any other leaf (a group, Subsurface, Toon) makes the material
+refused by name.
 """
 
 from typing import NamedTuple

@@ -1,30 +1,12 @@
 """EEVEE's glossy reflections of the world under Keep BSDF, given back by prefiltered maps.
 
-Keep BSDF hides the world from EEVEE's lighting (``world_diffuse``), which also takes its
-reflections away. They are added back to each material as an emission seen by EEVEE only:
-
-* **Maps**: the world prefiltered with GGX at ``core.glossy.ROUGHNESS_LEVELS`` (equirect, in
-  world directions, the Mapping rotation and Strength applied), stored as packed float images
-  marked ``IMAGE_MARKER`` (so the .blend renders them where the add-on is not installed).
-  ``write_maps`` is their one write path: Apply makes them when the world has none, Compute
-  from World rewrites them in place when it has (the materials follow without re-Apply).
-* **Nodes** (``add_eevee_reflections``): a Material Output of target EEVEE (Cycles keeps its
-  own output, unchanged) whose Surface is what the material renders (BSDF + SH diffuse) plus
-  an Emission of, for each Principled BSDF of the surface,
-
-      coverage · P(r_eff, N + t (R − N)) · (F0 · A(r, n·v) + B(r, n·v)),
-
-  R the view reflected about its Normal, P the maps looked up by Environment Texture nodes
-  and interpolated linearly in roughness, A and B the split sum's terms, t (toward the GGX
-  lobe's mean direction: ``core.glossy.lobe_factor``) and r_eff (the roughness of a
-  prefilter as spread as the lobe: ``core.glossy.effective_roughness``) read at its
-  Roughness r and n·v from a 16 × 16 table image (``core.glossy.environment_brdf_table``,
-  packed once per file), with the multiple-scattering term added (``core.glossy``),
-  F0 = (1 − Metallic) F0_IOR + Metallic · Base Color, coverage its Mix factors and Alpha. Every input is followed
-  (``keep_bsdf.Builder``). Remove deletes these nodes and, once no material keeps its BSDF,
-  every image made here (``remove_maps``).
-  Other shaders that reflect (Glossy, Glass, Anisotropic, ... BSDFs) and the Coat and Sheen
-  layers are not modelled: ``unmodelled`` names them for Apply's report.
+Keep BSDF hides the world from EEVEE's lighting, reflections included. ``write_maps`` stores
+the world prefiltered with GGX at ``core.glossy.ROUGHNESS_LEVELS`` as packed float images
+(``IMAGE_MARKER``); ``add_eevee_reflections`` gives each Principled BSDF an EEVEE-only emission
+coverage · P(r_eff, N + t (R − N)) · (F0 · A(r, n·v) + B(r, n·v)) (the split sum of
+``core.glossy``, with multiple scattering), F0 = (1 − Metallic) F0_IOR + Metallic · Base Color,
+t and r_eff read from a 16 × 16 table image. Other reflecting shaders, Coat and Sheen are not
+modelled (``unmodelled``). Details: docs/modules.md.
 """
 
 import json

@@ -1,34 +1,11 @@
 """The SH group's Albedo: the diffuse part of a material's surface, followed, never copied.
 
-For "KEEP_BSDF" (the default mode) the material keeps its BSDF and the group's Emission is
-added to it; the world's diffuse light is switched off (``world_diffuse``). The group's Albedo
-is then the surface's diffuse reflectance, summed over its diffuse leaves
-(``diffuse_weight.surface_leaves``), each scaled by its Mix factors:
-
-    albedo = Σ_leaves Π_path (Fac or 1 − Fac) · colour · w
-
-with, for a Diffuse BSDF, colour = Color and w = 1; for a Principled BSDF, colour = Base Color
-and
-
-    w = Alpha · (1 − Metallic) · (1 − Transmission Weight) · (1 − F0),  F0 = ((η − 1)/(η + 1))²
-
-with η its IOR. That is how Cycles layers the Principled BSDF: Alpha mixes it with a
-transparent BSDF, metallic and transmission are mixed in over the dielectric base, and the
-dielectric specular layer takes its directional albedo off the diffuse below it. F0 (the
-layer's albedo at normal incidence, smooth) stands in for Cycles' tabulated albedo, which also
-depends on roughness and view angle: measured on a white sphere under a white sky, Cycles'
-diffuse weight at IOR 1.5 is 0.959-0.965 facing the camera (F0 gives 0.960) and falls to 0.88
-(roughness 0) / 0.92 (roughness 0.5) at grazing view. Coat, sheen and Specular IOR Level are
-not modelled. "EMISSION" leaves the F0 factor out (nothing renders a specular layer there).
-
-Every input is followed, never copied: a linked input is linked to the same source socket; an
-unlinked one first gets a Value node (an RGB node for a colour) holding its value, linked into
-it, and that node feeds the SH term as well: the BSDF and the SH term read one socket, so
-editing, keyframing or driving the Base Color, Alpha, Metallic, a Mix factor, ... (now on that
-node; keyframes and drivers already on the input move to it) reaches both at once, with no
-re-Apply. (Drivers copying the values would be read in the same node tree they drive, a
-dependency cycle Blender warns about.) Remove gives each input the held node's value, its
-keyframes and drivers back and deletes it (``release``).
+albedo = Σ_leaves Π_path (Fac or 1 − Fac) · colour · w over the diffuse leaves of the Surface
+(``diffuse_weight.surface_leaves``): w = 1 for a Diffuse BSDF; for a Principled BSDF
+w = Alpha · (1 − Metallic) · (1 − Transmission Weight) · (1 − F0), F0 = ((η − 1)/(η + 1))²
+(left out in "EMISSION"), as Cycles layers it. Each input is linked to the same source, or to
+a Value/RGB node holding its value (with its keyframes and drivers) that feeds both the BSDF
+and the SH term; ``release`` puts the values back. Details: docs/modules.md.
 """
 
 from ..data import compat

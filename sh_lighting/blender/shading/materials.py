@@ -1,38 +1,12 @@
 """Put the "SH Irradiance" group into materials and take it out again, leaving no trace.
 
-Two modes (``MODES``):
-
-* "KEEP_BSDF" (the default): the material keeps its BSDF, so lamps (with their shadows),
-  glossy and coat reflections of the world (Cycles) and transmission keep working, and the
-  group's Emission (the surface's diffuse albedo × E/π, eq. 13 of Ramamoorthi and Hanrahan
-  2001) is added to it, replacing the world's diffuse light, which the world then no longer
-  gives, in Cycles or EEVEE (``world_diffuse``; in EEVEE the world lights nothing but the
-  camera's background, and each material gets the world's reflections back, for EEVEE only,
-  from maps prefiltered for its roughness: ``glossy``).
-* "EMISSION": the group's Emission alone drives the Surface: exact, noise free at one sample,
-  but nothing else lights the material (no lamps, no reflections; ``notes`` says so in the
-  panel and at Apply).
-
-``apply_to_materials`` adds one group node per material. Its Albedo is the diffuse albedo of
-what the active Material Output renders (``keep_bsdf.albedo``: the diffuse leaves of the
-surface with their Mix factors, Alpha, Metallic, ...; every input followed, never copied), its
-Normal the first diffuse BSDF's linked Normal input if any (normal and bump maps keep
-working), and its "Shader" output drives (KEEP_BSDF: is added to) the Surface of every Material
-Output node. The links it replaces are recorded as JSON in the custom property ``NODE_MARKER``
-of the added node (with the mode, the names of the other nodes it added, the inputs it gave
-a Value/RGB node, and the material's Cycles Emission Sampling, set to None: the SH emission
-is reflected light, not a lamp); ``remove_from_materials`` puts all of it back (the Emission
-Sampling only if it is still None: a value the user chose since stays) and deletes
-those nodes, and gives each world its diffuse light back once no material of the file is in
-"KEEP_BSDF" mode. Applying to a material that already has the group first removes it, then
-applies it again (a refresh: nothing stacks).
-
-Materials without a readable diffuse part are left alone and reported as skipped, with the
-reason (``diffuse_weight.diffuse_leaves``): a surface made only of shaders without one, a
-surface from a node group or another shader whose diffuse colour cannot be read, an
-unconnected Surface. Only the materials given are changed (and, in "KEEP_BSDF", the worlds
-showing them); the shared group is (re)built once per call (``nodes.ensure_node_group``).
-Every material is checked before it is changed; an error while changing it is rolled back.
+Its Emission is the surface's diffuse albedo × E(n)/π (eq. 13 of Ramamoorthi and Hanrahan
+2001). "KEEP_BSDF" (default) adds it to the material's BSDF and takes the world's diffuse light
+away (``world_diffuse``; EEVEE's reflections come back from ``glossy``'s maps); "EMISSION"
+drives the Surface with it alone. The replaced links and settings are recorded in the added
+node's ``NODE_MARKER`` property and ``remove_from_materials`` restores them. Materials without
+a readable diffuse part are skipped with the reason; errors roll back. Details:
+docs/modules.md.
 """
 
 import functools

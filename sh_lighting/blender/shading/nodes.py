@@ -1,32 +1,11 @@
 """The "SH Irradiance" shader node group: eq. 13 of the paper, built from native nodes only.
 
-One group serves every material and every scene of a .blend file. Its Attribute nodes of type
-View Layer read ``sh_L00`` ... ``sh_L22`` and their gains ``sh_L00_gain`` ...
-(``scene_data.PROPERTY_NAMES``, ``GAIN_NAMES``) at render time from the scene being rendered
-and multiply them (L_lm = s_lm · c_lm), so
-
-* editing, keyframing or driving a coefficient or a gain reaches the next render and redraw
-  without rebuilding the tree: the group always holds all nine terms, RGB, whatever the
-  values (benchmarks/REPORT.md §4: leaving terms out bought nothing measurable on the
-  bundled HDRIs, where no term can be left out, and stale renders whenever the values moved);
-* a material shared by two scenes shows each scene's own lighting, hence one group per file;
-* a saved .blend renders the same where this add-on is not installed (no Script/OSL node, no
-  registered property: plain custom properties, docs/reference.md §3), in Cycles and EEVEE alike.
-
-E is the polynomial itself, not clamped at 0 (what the render shows is what is stored; the
-Design tools warn about and remove negative lighting).
-
-Interface
-  inputs   Normal (vector, world space; unlinked or zero = the shading normal of the Geometry
-           node. Shader node groups cannot default a socket to the normal, so a zero-length
-           input is replaced by Geometry > Normal inside the group),
-           Albedo (colour, default white)
-  outputs  Irradiance (E(n), eq. 13), Diffuse (Albedo · E / π, the radiance a Lambertian
-           surface reflects), Shader (Emission of colour Diffuse, strength 1: a drop-in surface)
-
-The group is recognised by the custom property ``GROUP_MARKER`` (not by its name, which the
-user may change); ``ensure_node_group`` rebuilds its nodes in place (its interface and the
-links of materials into it are kept), which also repairs a hand edit.
+E(n) = c1 L22 (x² − y²) + c3 L20 z² + c4 L00 − c5 L20 + 2 c1 (L2-2 xy + L21 xz + L2-1 yz)
++ 2 c2 (L11 x + L1-1 y + L10 z), with L_lm = s_lm · c_lm read at render time by Attribute
+nodes (View Layer) from the scene's ``sh_L..`` properties: one group per file, no add-on
+needed to render. Inputs Normal (zero: the shading normal) and Albedo; outputs Irradiance,
+Diffuse = Albedo · E / π and Shader (an Emission of Diffuse). Found by ``GROUP_MARKER``;
+``ensure_node_group`` rebuilds it in place. Details: docs/modules.md.
 """
 
 from math import pi

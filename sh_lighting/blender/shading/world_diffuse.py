@@ -1,25 +1,12 @@
 """The world stays the camera's background but gives no diffuse light: what "KEEP_BSDF" needs.
 
-Under "KEEP_BSDF" a material's diffuse light from the world is the SH term (eq. 13 of
-Ramamoorthi and Hanrahan 2001, ``nodes.py``), so the world must not light it a second time:
-
-* **Cycles**: the world's ray visibility for diffuse rays (``World.cycles_visibility.diffuse``)
-  is switched off. Diffuse closures neither see the world through bounces nor sample it as a
-  light; glossy and transmission closures still reflect and refract it, lamps light every
-  closure.
-* **EEVEE** ignores ray visibility. Its world lighting is one capture of the world shader,
-  made with Light Path "Is Camera Ray" = 0 and "Is Glossy Ray" = 1 (measured in 4.2 and 5.0:
-  a world of Mix(black, world, Is Diffuse Ray) or Mix(black, world, max(Is Camera Ray, Is Glossy
-  Ray)) lights a diffuse sphere exactly as the world itself does), which serves diffuse and
-  glossy alike. So a World Output of target EEVEE is added (EEVEE prefers an output of its own
-  target to one of "All"), whose Surface is Mix(nothing, the world's surface, Is Camera Ray):
-  the camera sees the world, the capture sees black. In EEVEE the materials are then lit by
-  the SH term and the lamps; the world's reflections come back through maps of it prefiltered
-  for the roughness, added to each material for EEVEE only (``glossy``, ``ENGINE_NOTES``).
-
-The original visibility and the names of the nodes added are kept on the world as JSON in
-``WORLD_MARKER``; each added node carries ``NODE_MARKER``. ``restore`` puts the visibility back
-and deletes exactly those nodes. What is changed is tagged for the open viewports.
+The SH term (eq. 13) is then the material's diffuse light, so the world must not add it again.
+Cycles: the world's diffuse ray visibility is switched off (glossy and transmission still see
+it). EEVEE ignores ray visibility and lights with one capture of the world shader (made with
+"Is Camera Ray" 0), so a World Output of target EEVEE with Mix(nothing, the world, Is Camera
+Ray) is added: the camera sees the world, the capture black. The old visibility and the added
+nodes are recorded in ``WORLD_MARKER`` / ``NODE_MARKER``; ``restore`` puts them back.
+Details: docs/modules.md.
 """
 
 import json

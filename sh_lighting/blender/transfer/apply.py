@@ -1,24 +1,12 @@
 """Light baked objects' materials by the "SH Transfer" group instead of "SH Irradiance".
 
-The Apply machinery of ``shading.materials`` does the work (albedo and diffuse weight linked
-from the BSDF, the recorded links, rollback, Remove): the materials are applied in the chosen
-mode ("KEEP_BSDF": lamps, shadows and glossy reflections stay, the world's diffuse light is
-replaced; "EMISSION": the transfer alone, exact and noise free at one sample), then each added
-group node is pointed at the "SH Transfer" group (same interface) and marked with
-``NODE_MARKER``. Remove (``materials.remove_from_materials``) undoes it like any Apply, the
-Emission Sampling (set to None, Cycles must not sample the SH emission as a light: measured on
-the transfer's test scene 6.4 % too bright, 8.7 % RMSE, with Auto; 0.96 % with None) with the
-rest, since it is kept in the same record. The plain Apply (``apply_keeping_transfer``, the
-panel's Apply and ``api.apply_to_materials``) keeps the transfer where it is, in the mode it
-is given: Keep BSDF applies to the whole scene, and a plain Apply for one new object must not
-take the shadows off the baked ones; Remove takes it out, Apply then gives "SH Irradiance".
-
-Only materials of baked objects are changed. A material also used by an object without a bake
-would give that object no light (its Attribute nodes read 0): such materials are skipped with
-the reason, nothing changed.
-
-This is kept beside ``shading.materials`` rather than as one of its MODES while that module's
-modes are being restructured.
+``shading.materials``' Apply does the work in the chosen mode, then each added group node is
+pointed at "SH Transfer" (same interface) and marked ``NODE_MARKER``; Remove undoes it like any
+Apply (Emission Sampling None included: with Auto the transfer scene rendered 6.4 % too
+bright). ``apply_keeping_transfer`` (the panel's Apply) keeps the transfer of baked objects.
+Only materials of baked objects change: one also used by an unbaked object is skipped with the
+reason (its Attribute nodes would read 0). Kept beside ``shading.materials``, not as one of its
+MODES, while those modes are being restructured.
 """
 
 from typing import NamedTuple

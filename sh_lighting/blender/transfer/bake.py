@@ -1,33 +1,12 @@
 """Bake the transfer vectors T_lm of picked meshes with Cycles and store them in the meshes.
 
-Precomputed radiance transfer (Sloan, Kautz and Snyder 2002, eq. 1-3 for diffuse surfaces):
-for distant lighting L(ω) = Σ L_lm Y_lm(ω), a diffuse point p with visibility and
-interreflection receives the irradiance
-
-    E(p) = Σ_lm T_lm(p) L_lm,   T_lm(p) = the irradiance at p under a world emitting Y_lm
-
-(T_lm of an unoccluded point with normal n is Â_l Y_lm(n), eq. 13 of Ramamoorthi and
-Hanrahan 2001 term by term: docs/reference.md). Cycles computes T_lm: its Diffuse bake with
-the Direct and Indirect contributions and no Color is the light a diffuse surface receives
-divided by π (checked: a constant world of radiance 1 bakes to exactly 1.0 on an unoccluded
-plane), shadowed by every object of the scene and with the interreflections of the scene's
-materials, up to the scene's Cycles bounces. So T_lm = π · bake of the world Y_lm; the
-basis worlds and the negative lobes (by linearity) are ``basis``.
-
-Stored per face corner (each corner has its face's normal: hard edges stay hard) in nine
-colour attributes ``ATTRIBUTE_NAMES`` (FLOAT_COLOR, CORNER; RGB: interreflection off coloured
-materials makes T_lm coloured), read by the "SH Transfer" node group (``transfer.nodes``)
-with Attribute nodes, so a saved .blend renders without the add-on. The object keeps a JSON
-record ``RECORD`` (samples, seconds, and the fingerprints ``stale.status`` compares: its own
-geometry and placement, and the scene's renderable objects) so the panel can say the bake is
-stale after an edit.
-
-The user's scene is changed only for the bake and put back in ``finally``: world, render
-engine, samples, selection, active colour attributes; its lights are hidden (T_lm is the
-response to the world Y_lm alone: a lamp, e.g. one Extract Lights made, would otherwise be
-baked into every term and counted again by the lamp itself); the group nodes the add-on put into
-materials are muted during the bake (so SH emission is not baked as light; a material in
-Emission mode then reflects no light into the bake, which ``BakeInfo.notes`` says).
+Precomputed radiance transfer (Sloan, Kautz and Snyder 2002, eq. 1-3): a diffuse point
+receives E(p) = Σ_lm T_lm(p) L_lm, T_lm(p) the irradiance at p under a world emitting Y_lm
+(Â_l Y_lm(n) where nothing occludes, eq. 13). Cycles' Diffuse bake (Direct + Indirect, no
+Color) is that irradiance / π, so T_lm = π · bake of the world Y_lm (``basis``). Stored per
+face corner in the colour attributes ``ATTRIBUTE_NAMES`` with a ``RECORD`` for ``stale``; the
+scene's world, engine, samples and selection are put back, its lights hidden and SH nodes
+muted during the bake. Details: docs/modules.md.
 """
 
 import json

@@ -1,21 +1,10 @@
 """Temporary worlds whose radiance is one spherical harmonic (plus a constant), for the bake.
 
-Precomputed radiance transfer (Sloan, Kautz and Snyder 2002, §3-4) needs the response of a
-point to a distant lighting equal to each basis function Y_lm (docs/reference.md: real SH
-without the Condon-Shortley phase, index l(l+1)+m, Blender z-up axes). A world emits in the
-direction ω (a unit vector pointing away from the scene) the radiance
-
-    index 0:      1                                   (the constant world)
-    index k ≥ 1:  OFFSETS[k] + Y_lm(ω)                (never negative)
-
-built from native nodes: in a world, Texture Coordinate > Generated is the direction of the
-ray (checked: a world 1 + ω_z bakes on an upward plane to 1 + 2/3, the exact (E/π) of
-∫(1 + z) cos θ dω = π + 2π/3). The bake's response is linear in the world, so the transfer of
-Y_lm is the bake of world k minus OFFSETS[k] times the bake of the constant world (negative
-lobes by linearity, with emission kept non-negative: Cycles' light sampling of the world
-assumes non-negative radiance). OFFSETS[k] = −min over the sphere of Y_lm, the smallest
-offset keeping the radiance non-negative (less offset, less noise carried into the
-difference).
+World 0 emits 1; world k ≥ 1 emits OFFSETS[k] + Y_lm(ω) (never negative: Cycles samples the
+world as non-negative light), OFFSETS[k] = −min Y_lm, from native nodes (Texture Coordinate >
+Generated is the ray's direction in a world). The bake is linear in the world, so the transfer
+of Y_lm is bake(k) − OFFSETS[k] · bake(0) (Sloan, Kautz and Snyder 2002, §3-4). Checked: the
+world 1 + ω_z bakes to 1 + 2/3 on an upward plane, ∫(1 + z) cos θ dω / π.
 """
 
 import bpy

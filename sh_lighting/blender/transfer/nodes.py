@@ -1,23 +1,11 @@
 """The "SH Transfer" shader node group: E(p) = Σ T_lm(p) L_lm from native nodes only.
 
-Precomputed radiance transfer for diffuse surfaces (Sloan, Kautz and Snyder 2002, eq. 3): the
-lighting is the scene's nine coefficients L_lm = s_lm · c_lm, read by the very Attribute nodes
-(type View Layer) of the "SH Irradiance" group (``shading.nodes.lighting_readers``), so the
-sliders, presets, rotation, gains and keyframes change the lighting live; the transfer T_lm(p)
-is read per face corner from the mesh's colour attributes ``bake.ATTRIBUTE_NAMES`` (Attribute
-nodes, type Geometry). Per channel, E = Σ T_lm ⊙ L_lm, summed from L22 back to L00 as in the
-"SH Irradiance" group. A saved .blend renders it where the add-on is not installed.
-
-The interface is the "SH Irradiance" group's (``shading.nodes.INTERFACE``): the Apply
-machinery can put either group into a material. Its Normal input is not used: the transfer
-already holds the surface's orientation, shadows and interreflection (a normal map's detail is
-not in it). On an object without the attributes (never baked) the Attribute nodes read 0, so
-the group gives no light: Apply in this mode only to materials of baked objects.
-
-Outputs: Irradiance (E), Diffuse (Albedo · E / π), Shader (Emission of Diffuse, strength 1
-for every ray but diffuse ones: the bounce between baked surfaces is in T_lm already, so
-diffuse rays do not see this emission; an unbaked diffuse object therefore gets no bounce
-light from baked ones).
+Precomputed radiance transfer for diffuse surfaces (Sloan, Kautz and Snyder 2002, eq. 3): L_lm
+= s_lm · c_lm from the "SH Irradiance" group's View Layer readers (live sliders, keyframes),
+T_lm(p) per face corner from the colour attributes ``bake.ATTRIBUTE_NAMES``; per channel
+E = Σ T_lm ⊙ L_lm. Same interface as "SH Irradiance" (Normal unused: T_lm holds the
+orientation); outputs Irradiance, Diffuse = Albedo · E / π, Shader (an Emission of Diffuse
+that diffuse rays do not see: the bounce is in T_lm already). Unbaked objects read 0.
 """
 
 from math import pi

@@ -1,19 +1,10 @@
 """The "SH Lighting" panel, in World Properties and in the 3D Viewport sidebar.
 
-Both places draw with the same functions. From the top: the presets (a popover in the panel
-header, as Blender's own preset menus), the irradiance sphere of the current lighting (what an
-artist watches while editing) with the negative-light warning, Compute / Reset, the capture
-width (procedural worlds only: an image world is read directly), Apply / Remove.
-
-The "Coefficients" sub-panel has one line per L_lm: its name (a flat button whose tooltip says
-what the coefficient does now and which shows or hides its R, G, B values), a swatch of the
-triple's colour c_lm and its signed strength, the gain s_lm, to drag, type or keyframe (both
-are the scene's custom properties of ``scene_data``, read by materials at render time; the
-lighting is s_lm · c_lm).
-
-Texts wrap to the panel's width (``wrapped``); what does not fit on one line lives in
-tooltips. Nothing here writes coefficients: fields and buttons go through the properties and
-operators that do.
+Both draw with the same functions: presets (a header popover), the irradiance sphere with the
+negative-light warning, Compute / Reset, the capture width (procedural worlds), Apply /
+Remove; the "Coefficients" sub-panel has per L_lm its name (tooltip: what it does now), a
+swatch of c_lm and the gain s_lm (L_lm = s_lm · c_lm). Texts wrap to the panel's width.
+Nothing here writes coefficients: fields and buttons go through properties and operators.
 """
 
 import textwrap

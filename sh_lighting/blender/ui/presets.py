@@ -1,34 +1,12 @@
 """Presets in the UI: a preset menu, Save/Remove user presets, Import and Export.
 
-Why not Blender's own preset machinery (``AddPresetBase`` + ``Menu.draw_preset`` +
-``script.execute_preset``): those presets are Python files that Blender *executes*, which would
-make a downloaded preset able to run any code, and they store property assignments, while
-our lighting lives in scene custom properties and our preset format is a strict, versioned
-JSON file (``core.presets``) that other tools and the command line read too. So the menu
-follows Blender's conventions without executing anything:
-
-* ``SHLIGHT_PT_presets``, the popover in the header of the SH Lighting panel (Blender's place
-  for presets, with the PRESET icon), lists the shipped presets (the package's ``presets``
-  folder) and, under them, the user's presets from Blender's user preset folder
-  (``<user scripts>/presets/sh_lighting``, beside Blender's own presets); each entry runs
-  ``shlight.load_preset`` with the file's path. User entries have a "−" on their right
-  (``shlight.preset_remove``, whose confirmation names the preset); shipped presets have none
-  and ``preset_io.remove_user_preset`` refuses them anyway. Under the list, as in Blender's
-  preset popovers, a name field and "+" (``shlight.preset_add``) save the current
-  coefficients as a user preset under a sanitised file name (``preset_io.preset_file_name``),
-  refusing to replace one unless Overwrite is ticked; "+" without a name opens a dialog whose
-  name field is ready for typing.
-* Import and Export use the file browser, opening in the .blend file's folder: Import reads our
-  JSON; Export is one operator with a Format choice (``preset_io.FORMATS``; the Export menu
-  has an entry per format, each the same operator with its format set), each format with its
-  own default file name, and writes atomically, refusing to replace an existing file unless
-  Overwrite is ticked (the browser also flags existing files in red).
-
-Operators that change the scene (load, import) are undoable; those that only touch files
-(export, save, remove) are not. All work in background mode with ``'EXEC_DEFAULT'``; errors
-become an ERROR report and ``{'CANCELLED'}`` with nothing changed. The popover is drawn by
-``draw_preset_menu`` in the header of both main panels (World Properties and the 3D Viewport
-sidebar).
+Not Blender's preset machinery, whose presets are Python files that Blender executes: ours
+are strict JSON (``formats.presets``), read, never run. The popover in the header of the main
+panels lists shipped then user presets (``<user scripts>/presets/sh_lighting``), with "+" and
+"−" for user presets; Import reads our JSON, Export is one operator with a Format choice and a
+default file name per format, refusing to replace a file unless Overwrite is ticked. Scene
+changes are undoable; errors are an ERROR report with nothing changed. Details:
+docs/modules.md.
 """
 
 import os

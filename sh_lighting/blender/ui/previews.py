@@ -1,19 +1,9 @@
 """The Design panel's images: one ``bpy.utils.previews`` collection, filled from core's numpy.
 
-``register()`` opens the collection and fills the 9 basis images (they never change);
-``unregister()`` removes it. The irradiance sphere is exposed to its own range (its brightest
-pixel white, ``core.preview.fit_exposure``), not through the scene's view transform: a UI
-icon is shown as it is stored, and at the scene's exposure a sun-lit world turned the sphere
-into a white disc. It is refreshed on demand: ``irradiance`` compares the coefficients' bytes
-with those it last drew and recomputes only when they differ, so drawing the panel costs nothing while the
-lighting stays the same and one small image (``bench_preview``: a few ms) after an edit.
-
-``ImagePreview`` pixels run bottom row first and are stored as bytes (values quantised to
-1/255) with premultiplied alpha; core's images run top row first with straight alpha, so
-``to_preview`` flips them and multiplies colour by alpha (else the transparent corners around
-each sphere show as coloured squares). ``swatch`` gives the small square of one coefficient's
-colour drawn on its line in the Coefficients panel. Headless, Blender gives
-every preview ``icon_id`` 0 (there are no UI icons), but the pixels are kept.
+``register()`` opens it with the 9 basis images; ``irradiance`` redraws the sphere only when
+the coefficients' bytes change, exposed to its own range (brightest pixel white,
+``core.preview.fit_exposure``); ``swatch`` is one coefficient's colour square. Preview pixels
+run bottom row first with premultiplied alpha, so ``to_preview`` flips and premultiplies.
 """
 
 import bpy

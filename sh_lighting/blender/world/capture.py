@@ -1,39 +1,12 @@
 """Render a world as Cycles sees it into an equirectangular float image, leaving no trace.
 
-Used for worlds whose node trees the add-on cannot read directly (Sky Texture, gradients,
-mixes, unsupported mapping...): whatever the nodes do, the panorama is the radiance arriving
-at the origin from every direction, laid out in Blender's own equirectangular convention
-(docs/reference.md §3: u = 0.5 − atan2(y, x)/2π, image centre facing +X, v from the bottom), so
-``sh_lighting.core.project_equirect`` takes it directly (rows are returned top to bottom).
-
-How, without touching the user's scene:
-
-* a temporary copy of the world (``World.copy()``: its node tree is copied, its images and
-  animation are shared) in a temporary scene (``bpy.data.scenes.new``), with a temporary
-  panoramic equirectangular camera at the origin, rotated (90°, 0°, −90°) so that the image
-  centre looks along +X with +Z up (checked against an Environment Texture, texel for texel).
-  The copy is made visible to camera rays and its Cycles importance map (multiple importance
-  sampling, useless without objects, and measured at ~2.5 s for an image world) is switched
-  off; the user's world itself is never written to;
-* Cycles on the CPU, box pixel filter of one pixel (each pixel is the average of the world over
-  its texel), no denoising, no dithering, no clamping, Standard view transform, exposure 0;
-* the still is written as a 32-bit float OpenEXR in a ``tempfile`` directory (headless bpy
-  cannot read the 'Render Result' pixels), read back, and everything temporary is removed:
-  files, image, camera, object, world copy, scene. A 'Render Result' image that did not exist
-  before is removed too. The directory is named ``sh_lighting_capture_<process id>_...``; one
-  a killed capture left (its process gone) is removed by the next capture
-  (``remove_stale_captures``).
-
-A sun much smaller than a pixel (a Sky Texture's is 0.545° wide and carries ~85% of its light)
-is hit by too few of a pixel's samples: its light came out anywhere from 0% to +35% wrong at
-256 × 128 × 16 samples. So the block of pixels around such "hot" pixels is rendered again up to
-16 times finer (a border render, the camera turned by whole columns so that the block does not
-cross the seam) and averaged back by solid angle (``core.supersample``): the Sky Texture's L00
-then agrees with a 40-second converged render to 0.3% at the default width. What remains is
-the capture's resolution: a point-like light is counted at its texel's centre.
-
-What the capture sees is what *camera* rays see: a world using a Light Path node to show the
-camera something else than it lights the scene with is captured as the camera sees it.
+For worlds the reader cannot read (Sky Texture, gradients, mixes): a panoramic camera at the
+origin in a temporary scene with a copy of the world renders the radiance arriving from every
+direction in Blender's equirect convention (u = 0.5 − atan2(y, x)/2π, docs/reference.md §3),
+box filter, no denoising or clamping; the EXR is read back and everything temporary removed.
+Pixels around a sun smaller than a pixel are rendered again up to 16× finer and averaged back
+by solid angle (``core.supersample``). What camera rays see is captured. Details:
+docs/modules.md.
 """
 
 import math

@@ -1,27 +1,12 @@
 """Read Blender images into numpy arrays laid out the way ``sh_lighting.core`` wants them.
 
-The core takes ``(H, W, C)`` float arrays with rows **top to bottom**; Blender's
-``Image.pixels`` run bottom row first, so the arrays returned here are flipped.
-
-What ``Image.pixels`` holds (observed on Blender 4.2 and 5.0, see tests/blender/world/test_images.py):
-
-* float images (OpenEXR, Radiance HDR, 16-bit PNG, generated float images): scene-linear
-  values in the file's working space: Blender converts them from the image's colour space
-  when it loads them;
-* 8-bit images such as an sRGB PNG: the stored bytes divided by 255, **not** linearised: a
-  byte of 128 reads as 0.50196, whatever the image's colour space is set to.
-
-``linear_pixels`` is the one decoding every path uses (Compute from World, the design tools,
-the command line's ``compute`` and ``batch`` through ``load_image_pixels``): the radiance
-Blender renders. Float pixels are used as they are; 8-bit texels are decoded from the image's
-colour space (``core.colour.BYTE_SPACES``: sRGB and the linear spaces; "Non-Color" data is
-used as it is) to the file's working space as Cycles does it (``core.colour.byte_decoding``):
-mid-grey byte 128 of an sRGB PNG is 0.2159 in a Rec.709 file, pure red is
-(0.613, 0.070, 0.021) in an ACEScg one (tests against Cycles captures in
-tests/blender/world/test_colour_spaces.py). Images Blender renders otherwise than modelled here
-raise ``DecodeError`` saying why: 8-bit images in other colour spaces, and 8-bit texels with
-alpha < 1 in Straight or Premultiplied mode (Cycles shows their colour premultiplied, rounded
-in the encoded bytes); the world reader then lets Cycles capture the world instead.
+(H, W, C) float arrays, rows top to bottom (``Image.pixels`` runs bottom first). Float images
+hold scene-linear values already; 8-bit ones hold byte / 255, undecoded. ``linear_pixels`` is
+the one decoding every path uses: 8-bit texels are decoded from the image's colour space to
+the working space as Cycles does (``core.colour.byte_decoding``: byte 128 of an sRGB PNG is
+0.2159 in a Rec.709 file); what Blender renders otherwise than modelled (other colour spaces,
+alpha < 1) raises ``DecodeError`` and the reader captures the world instead. Details:
+docs/modules.md.
 """
 
 import os

@@ -1,29 +1,12 @@
 """What a scene's world is, and its 9 lighting coefficients L_lm, as Blender renders it.
 
-``read_world(scene)`` is the world reader every part of the add-on uses (Compute from World,
-the design tools, preset metadata, light extraction). It reads the world's node tree, as
-evaluated by the depsgraph at the scene's current frame (keyframes and drivers of the
-Background's Strength and the Mapping rotation included), writes nothing, and returns one of:
-
-* ``ImageSource``: the world is World Output ← Background ← Environment Texture
-  (Equirectangular or Mirror Ball), optionally ← Mapping (Point, rotation only) ← Texture
-  Coordinate (Generated), with an image ``images.linear_pixels`` decodes exactly. It holds
-  the image, its projection, the Mapping rotation, the Background Strength, the image's
-  colour space and the file's working space; ``pixels()`` reads the radiance on demand. The
-  Strength scales L, and a Mapping rotation R gives the lighting of the image rotated by R⁻¹
-  (docs/reference.md §3; checked against Cycles renders in tests/blender/world/test_world.py);
-* ``ProceduralSource``: anything else (Sky Texture, gradients, mixes, other colour spaces,
-  unsupported Mapping settings, ...), with the reason; ``world_coefficients`` renders it by
-  Cycles into an equirectangular panorama (``capture.capture_world``).
-
-Errors that no rendering can fix (no world, no output, a texture without its image, an image
-whose file is missing) raise ``WorldError`` with what to do; nothing in ``bpy.data`` changes.
-
-Coefficients are in the file's working colour space (``working_space``: "Linear Rec.709"
-before Blender 5.0), like everything Blender renders; exports convert them
-(``core.colour.convert_coefficients``).
-
-``compute.compute_and_store`` stores its result on the scene (Compute from World).
+``read_world(scene)`` reads the world's node tree as evaluated at the current frame, writes
+nothing, and returns an ``ImageSource`` (World Output ← Background ← Environment Texture,
+optionally ← Mapping ← Texture Coordinate: the image, its projection, rotation R and Strength
+s; the lighting is s × the image's rotated by R⁻¹, docs/reference.md §3) or a
+``ProceduralSource`` (anything else, with the reason), which ``world_coefficients`` captures
+with Cycles (``capture``). ``WorldError`` for what no render can fix. Coefficients are in the
+file's working colour space. Details: docs/modules.md.
 """
 
 import time
