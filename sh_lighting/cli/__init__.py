@@ -61,7 +61,7 @@ def main(argv=None, prog=PROG):
 
 
 def run_blender_command(argv):
-    """``blender -c sh_lighting ARGS``: ``main`` on ARGS (registered by blender/command.py).
+    """``blender -c sh_lighting ARGS``: ``main`` on ARGS (registered by cli/command.py).
 
     argparse's own exits (``--help``, wrong arguments) become the return value, which Blender
     makes its exit status, instead of a SystemExit raised inside Blender's command runner.
