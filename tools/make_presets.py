@@ -1,19 +1,10 @@
-"""Write the bundled lighting presets under presets/.
+"""Write the bundled lighting presets under presets/ (python -m tools.make_presets [--no-hdri]).
 
-Usage: python -m tools.make_presets [--no-hdri]
-
-* The paper's Figure 2 probes (grace_cathedral, eucalyptus_grove, st_peters_basilica), read
-  from tests/data/figure2_coefficients.json (the paper's table) and converted from the
-  paper's y-up frame to Blender's by an exact SH rotation (``frames.paper_to_blender``).
-  Needs numpy only.
-* The 8 HDRIs that ship with Blender (studiolights/world: city, courtyard, forest, interior,
-  night, studio, sunrise, sunset), projected exactly with ``project_equirect``, each with its
-  9-term error estimate against the exact irradiance (``reference_irradiance``) at 512 normals
-  (``sh_lighting.core.irradiance.error_estimate``, the same measure as ``compute``).
-  Needs the ``bpy`` module; skipped with ``--no-hdri``.
-
-Existing preset files are replaced. The files carry no creation date, so regenerating them
-gives the same bytes when the inputs have not changed.
+The paper's Figure 2 probes from tests/data/figure2_coefficients.json, turned from its y-up
+frame to Blender's by an exact SH rotation (``frames.paper_to_blender``; numpy only); the 8
+HDRIs that ship with Blender, projected with ``project_equirect``, each with its 9-term error
+estimate at 512 normals (needs bpy; skipped with ``--no-hdri``). Files carry no date, so
+unchanged inputs give the same bytes.
 """
 
 import json

@@ -1,15 +1,11 @@
 """A stand-in for ``blender -c ID ARGS...`` built on the bpy module (no Blender program here).
 
-What Blender does for ``-c``/``--command`` (implying ``--background``): it registers the
-enabled add-ons and extensions, looks ID up among the commands registered with
-``bpy.utils.register_cli_command``, calls that command's ``execute`` with the arguments after
-ID and exits with its return value (an unknown ID: a message and status 1). This script does
-the same with the bpy module: it records what ``register_cli_command`` is given while
-``sh_lighting.register()`` runs (the real function is still called), then runs the recorded
-callback. Only the arguments the job bundles pass are understood: ``[-b] -c ID ARGS...``.
+As Blender does for ``-c``: the commands registered with ``bpy.utils.register_cli_command``
+while ``sh_lighting.register()`` runs are recorded (the real function still called), and ID's
+``execute`` is called with the arguments after it; its return value is the exit status (an
+unknown ID: a message and status 1). Understands ``[-b] -c ID ARGS...`` only.
 
-Usage: python blender_stand_in.py [-b|--background] (-c|--command) ID ARGS...
-(the package must be importable: PYTHONPATH=<repository>)
+Usage: PYTHONPATH=<repository> python blender_stand_in.py [-b] (-c|--command) ID ARGS...
 """
 
 import os

@@ -1,18 +1,10 @@
 """The Open Job Description bundles in farm/openjd, run for real by ``openjd run`` (openjd-cli).
 
-Each job is run as a farm would: ``python -m openjd run farm/openjd/<bundle>/template.yaml``
-with the bundle's own parameter file (converted from the Deadline Cloud format) plus the
-folders of the test. The Blender command of the bundles (job parameter BlenderCommand) is a
-shell script running ``tests/farm/blender_stand_in.py``, which takes Blender's ``-c ID ARGS``
-and calls the command that ``sh_lighting.register()`` registered with
-``bpy.utils.register_cli_command``, in the bpy module of the Python running the tests (there
-is no Blender program here; tests/farm/test_real_blender.py runs the real Blender 4.3).
-
-Checked: every task's log (its chunk, its files or frames, its exit status) and every output
-(the presets' coefficients, the frames' pixels), nothing written outside the output folder
-(the inputs, HOME and TMPDIR are left as they were), a rerun that skips what is done, a bad
-file failing its own task with its one-line error, and a job killed mid-task completed by a
-rerun.
+Each job runs as a farm would, with the bundle's own parameter file; its Blender command is
+``tests/farm/blender_stand_in.py`` on the bpy module (tests/farm/test_real_blender.py runs the
+real Blender). Checked: every task's log and output (the presets' coefficients, the frames'
+pixels), nothing written outside the output folder, a rerun that skips what is done, a bad file
+failing its own task with one line, and a job killed mid-task completed by a rerun.
 """
 
 import os

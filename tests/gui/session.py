@@ -1,25 +1,11 @@
 """An artist's session with SH Lighting in a real Blender window (run by ``blender --python``).
 
-Not a pytest module: ``tests/gui/test_gui.py`` installs the extension into a Blender with a
-window (``blender-gui-root run`` on this machine, or the user's Blender) and runs this file in
-it. Every step runs from a ``bpy.app.timers`` callback (the window exists only then) and acts
-through the window system: mouse clicks, drags and key presses sent with ``xdotool`` to the
-virtual screen, pictures taken with ImageMagick's ``import``. Python sets up only what an
-artist would set up by hand before the session (the world image, a Suzanne, the view) and
-reads what is stored to predict what the screen must show.
-
-The check after each step: the colour of every sampled pixel of the cube and of Suzanne on the
-screen against the prediction from the *stored* coefficients, eq. 13 of the paper evaluated
-here independently of the add-on, E(n) = c1 L22 (x²-y²) + c3 L20 z² + c4 L00 - c5 L20 +
-2 c1 (L2-2 xy + L21 xz + L2-1 yz) + 2 c2 (L11 x + L1-1 y + L10 z), at the normal n that a ray
-cast through that pixel hits (flat-shaded faces: the face normal is the shading normal),
-shown as albedo · max(E, 0) / π through the Standard view transform (sRGB, 8 bits). Pixels
-within 2 px of a face edge are left out (anti-aliasing). The viewport is polled until it
-matches or ``MATCH_TIMEOUT`` passes, so a stale viewport fails the check instead of passing
-after a lucky wait.
-
-Results go to ``$SHOTS/results.json`` (one entry per check, with what was measured), pictures
-to ``$SHOTS/*.png``.
+Not a pytest module: ``tests/gui/test_gui.py`` runs it in a Blender with a window. Every step
+runs from a ``bpy.app.timers`` callback and acts through the window system (``xdotool`` clicks,
+drags and keys; ImageMagick's ``import`` for pictures). After each step every sampled pixel of
+the cube and Suzanne must show albedo · max(E(n), 0) / π of the *stored* coefficients (eq. 13
+evaluated here independently of the add-on, at the normal a ray through the pixel hits), sRGB
+8 bits, polled until ``MATCH_TIMEOUT``. Results: ``$SHOTS/results.json`` and ``$SHOTS/*.png``.
 """
 
 import json

@@ -1,21 +1,10 @@
 """`make test-gui`: an artist's session with the add-on in a real Blender window.
 
-``session.py`` runs inside a Blender with a window on a virtual screen and drives it with
-real clicks and key presses (see its docstring for what each check compares). Here it is
-run once per test session, and each of its checks becomes one test, so a failure names the
-step and shows what was measured. Pictures, Blender's log and ``results.json`` go to
-``out/gui/``.
-
-Where it runs:
-
-* by default: ``tools/blender_gui_root.sh run`` (Debian's Blender in a Debian 13 root of its
-  own with Xvfb, xdotool and ImageMagick, at $BLENDER_GUI_ROOT, default /opt/blender-gui-root;
-  needs root privileges; the script builds the root on first use, about 2 minutes);
-* elsewhere: ``make test-gui BLENDER=/path/to/blender`` (4.2 or later) runs that Blender on a
-  fresh Xvfb screen with throw-away user folders (your preferences and extensions are not
-  touched); Xvfb, xdotool and ImageMagick's ``import`` must be on PATH.
-
-Without either, every test here is skipped with the reason.
+``session.py`` runs once per test session inside a Blender with a window on a virtual screen;
+each of its checks becomes one test, so a failure names the step and shows what was measured
+(pictures, Blender's log and ``results.json`` in ``out/gui/``). Where it runs (the Blender root
+of ``tools/blender_gui_root.sh``, or ``BLENDER=/path/to/blender``): docs/testing.md; without
+either every test here is skipped with the reason.
 """
 
 import json

@@ -1,21 +1,10 @@
 """Our sh.txt as Filament reads and shades it (no node: Filament's npm package does not run here).
 
-Filament's npm package is a WebAssembly build for browsers: in node 20 ``Filament.init`` never
-calls back (it fetches its .wasm as a web page would) and an Engine needs a WebGL2 canvas, so
-its own code cannot be run in these tests. What is run instead, from Filament's source as text
-facts (google/filament):
-
-* the reader: ``libs/filamentapp/src/IBL.cpp`` reads sh.txt line by line with
-  ``sscanf(line, "(%f,%f,%f)", &r, &g, &b)`` into floats — here the C library's own sscanf
-  through ctypes, with that format;
-* the shader: ``Irradiance_SphericalHarmonics(n)`` (shaders/src light_indirect.fs) returns
-  max(sh0 + sh1 n.y + sh2 n.z + sh3 n.x + sh4 n.y n.x + sh5 n.y n.z + sh6 (3 n.z² − 1)
-  + sh7 n.z n.x + sh8 (n.x² − n.y²), 0), the diffuse colour times it being the Lambertian
-  result (Fd_Lambert's 1/π is in the pre-scaled values) — evaluated here in float32.
-
-The normals are given in the frame of the file: cmgen's (x, y, z)_cmgen = (y, z, x)_blender
-or glTF's. The clamp at 0 is applied to both sides (our E(n)/π may dip below 0 for the
-signed lighting).
+Filament's npm package needs a browser (WebGL2), so its source is followed instead: the reader
+(``libs/filamentapp/src/IBL.cpp``: ``sscanf(line, "(%f,%f,%f)")``, here the C library's own
+sscanf through ctypes) and the shader ``Irradiance_SphericalHarmonics(n)`` = max(sh0 + sh1 y +
+sh2 z + sh3 x + sh4 yx + sh5 yz + sh6 (3z² − 1) + sh7 zx + sh8 (x² − y²), 0), evaluated in
+float32, at normals in the file's frame (cmgen's (y, z, x)_blender or glTF's).
 """
 
 import ctypes

@@ -1,18 +1,8 @@
 """One light out of each of the 8 HDRIs that ship inside bpy (``core.lights.extract_lights``
 with k = 1, what Split Sun was): the light plus the SH of the rest against brute force
-(eq. 1), at normals other than those the extraction measured its errors at.
-
-Measured with Blender 5.0.1 (mean / max % of the power, plain SH9 → light + SH9 at the
-extraction's 512 normals; the light's share of the power and its size):
-
-    city 0.98/2.83 → 0.31/0.79 (21.5 %, 0.8°)     courtyard 0.99/2.52 → 0.99/2.59 (1.4 %, 9.8°)
-    forest 0.79/2.45 → 0.59/1.95 (6.2 %, 2.3°)    interior 0.72/2.49 → 0.47/1.65 (19.9 %, 0.6°)
-    night 0.82/3.19 → 0.59/2.40 (12.5 %, 0.6°)    studio 2.05/6.30 → 1.36/4.38 (27.5 %, 5.4°)
-    sunrise 2.20/6.27 → 0.40/1.02 (54.4 %, 0.9°)  sunset 0.53/1.47 → 0.36/1.19 (2.1 %, 0.8°)
-
-Where the light carries 5 % of the power or more, it lowers both the mean and the largest
-error by a fifth or more; where it carries less (courtyard's softest, largest source), the mean
-barely moves, and the extraction only promises that it does not rise where it measured.
+(eq. 1), at normals other than those the extraction measured its errors at. Where the light
+carries 5 % of the power or more, it lowers both the mean and the largest error by a fifth or
+more; elsewhere the mean must not rise (the figures: docs/accuracy.md).
 """
 
 from math import pi

@@ -1,34 +1,10 @@
 """Pin the core's equirectangular texel <-> direction mapping against Cycles itself.
 
-The world is an Environment Texture (Closest, Equirectangular) -> Background -> World Output
-whose image encodes each texel's own (row counted top to bottom, column) in (R, G), B = 0.5.
-Cycles renders it (1 sample, no denoising, no dithering, filter width 0.01 px, EXR output), so
-each output pixel holds exactly the index of the texel its camera ray hit. For every pixel whose
-ray is not within 2 % of a texel of a texel boundary we assert that index equals
-``equirect.direction_to_texel(ray direction)``.
-
-Observed on Blender 5.0.1 / Cycles CPU:
-
-* An equirectangular panoramic camera (``camera.data.type = 'PANO'``,
-  ``panorama_type = 'EQUIRECTANGULAR'``, default latitude ±90°, longitude ±180°) centres its
-  image on the camera's local -Z, with local +Y up and local -X at image u = 0.25 (left of
-  centre). Output pixel (row y from the top, column x) of a W x H render therefore sees the
-  direction ``uv_to_direction((x + 0.5) / W, 1 - (y + 0.5) / H)`` expressed in the frame
-  (forward, left, up) = (-Z, -X, +Y) of the camera.
-* With camera rotation_euler = (90°, 0, -90°) that frame is the world frame (forward +X, left +Y,
-  up +Z), and the panoramic render is the environment image itself: same orientation, not
-  mirrored, centre facing +X, zenith at the top row. The panoramic camera and the Environment
-  Texture share one convention, and the core's mapping matches both pixel for pixel.
-* A perspective camera (local -Z forward, +Y up) shows, at pixel (x, y) of a square W x W render
-  with field of view a, the ray (((x + ½)/W - ½)·2 tan(a/2), (½ - (y + ½)/W)·2 tan(a/2), -1)
-  rotated by ``matrix_world``; its centre pixel shows the texel the core predicts for the aim.
-* Closest interpolation picks texel floor(u·W), floor((1 - v)·H) counted from the top, as the
-  core does. The only mismatches are rays lying exactly on a texel boundary (e.g. the -X seam
-  u = 0, the equator for an even height), where either neighbour is a correct answer.
-* Surprise: a ray exactly along +Z (the centre pixel of a camera aimed at the zenith) does not
-  show the top row: on a 45 x 23 texture it showed texel (row 22, column 14), a bottom-row
-  texel, probably acos of a z/|d| rounded above 1 in single precision (NaN). Its neighbours,
-  0.5° off the pole, are right. Only that measure-zero ray is affected, so it is excluded.
+The world's image encodes each texel's own (row, column) in (R, G); Cycles renders it with a
+panoramic or perspective camera (1 sample, Closest, filter 0.01 px), so each output pixel holds
+the index of the texel its ray hit, which must equal ``equirect.direction_to_texel`` of the ray
+for every pixel not within 2 % of a texel boundary. What Cycles was seen to do (the panoramic
+camera's frame, the one ray along +Z that misses the top row): docs/modules.md.
 """
 
 import math
