@@ -52,8 +52,10 @@ $(BENCH_STAMP): $(STAMP) requirements-bench.txt
 	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements-bench.txt
 	touch $(BENCH_STAMP)
 
-# The speed of prefiltering, the measurement tables that tests assert bounds on, then
-# benchmarks/REPORT.md with its plots.
+# The speed of prefiltering, the measurement tables that tests assert bounds on, then each
+# benchmark's fragment of benchmarks/REPORT.md (benchmarks/fragments/) with its plots, and
+# REPORT.md assembled from all the fragments (those of bench_lights and bench_transfer,
+# which are not run here, included).
 bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_prefilter
 	$(PY) -m benchmarks.bench_tables
@@ -61,6 +63,7 @@ bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_real_scene
 	$(PY) -m benchmarks.bench_sizes
 	$(PY) -m benchmarks.bench_photo
+	$(PY) -m benchmarks.fragments
 
 package: $(STAMP)
 	$(PY) -m tools.package dist

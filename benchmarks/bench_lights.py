@@ -2,8 +2,8 @@
 
     .venv/bin/python -m benchmarks.bench_lights [--hdri sunrise] [--size 48] [--no-eevee]
 
-writes its section of benchmarks/REPORT.md (between the ``<!-- bench_lights -->`` markers,
-the rest of the report untouched). Scene: benchmarks/shadow_scene.py (white diffuse sphere
+writes its fragment of benchmarks/REPORT.md (``fragments``: "lights"). Scene:
+benchmarks/shadow_scene.py (white diffuse sphere
 on a white diffuse plane, the bundled HDRI as the world). Reference: Cycles path tracing of
 the original world at ``REFERENCE_SAMPLES``. Compared, each at a few sample counts (time =
 the render's wall clock, errors = mean |image − reference| / mean reference over the pixels
@@ -19,8 +19,6 @@ SH + lights (its errors fitted by a power law of time) over the time SH + lights
 """
 
 import argparse
-import re
-from pathlib import Path
 from tempfile import TemporaryDirectory
 
 import bpy
@@ -32,15 +30,14 @@ from sh_lighting.blender.design import lights
 from sh_lighting.blender.shading import materials
 from sh_lighting.core import project_equirect
 
+from . import fragments
 from .shadow_scene import ShadowScene, covered, mean_deviation
 
-REPORT = Path(__file__).with_name("REPORT.md")
 REFERENCE_SAMPLES = 1024
 PATH_SAMPLES = (1, 4, 16, 64, 256)
 SH_SAMPLES = (1, 4, 16, 64)
 LIGHT_COUNTS = (0, 1, 2)
 REPEATS = 2  # each render this many times, the shortest time kept (the machine is shared)
-BEGIN, END = "<!-- bench_lights -->", "<!-- /bench_lights -->"
 
 
 def run(hdri, size, eevee, log=print):
@@ -125,7 +122,7 @@ def equal_error_ratios(rows, what):
 
 
 def section(rows, hdri, size):
-    lines = [BEGIN, "", f"## SH + extracted lights vs path tracing (sphere on a ground plane, "
+    lines = [f"## SH + extracted lights vs path tracing (sphere on a ground plane, "
              f"{hdri} HDRI)", "",
              f"`python -m benchmarks.bench_lights` ({size}×{size} px, Cycles CPU, 2 shared "
              f"cores; reference: path tracing at {REFERENCE_SAMPLES} samples; error = mean "
@@ -138,12 +135,11 @@ def section(rows, hdri, size):
     lines.append(f"Equal error: path tracing's error fitted as e ∝ n^{slope:.2f} of its sample "
                  "count n and its time as t0 + t1 n; for each SH render, the time path tracing "
                  "needs for the same error over the SH render's time (> 1: SH is faster).")
-    lines.append("")
+    lines += ["", "| method | samples | error | path tracing samples at that error | "
+              "time ratio |", "|---|---:|---:|---:|---:|"]
     for what in sorted({r[0] for r in rows if r[0].startswith(("SH", "plain"))}):
-        parts = [f"{n} samples {100 * e:.2f} % → path tracing {pn:.1f} samples, "
-                 f"**{ratio:.2f}×**" for n, _, e, pn, _, ratio in equal_error_ratios(rows, what)]
-        lines.append(f"- {what}: " + "; ".join(parts))
-    lines += ["", END]
+        lines += [f"| {what} | {n} | {100 * e:.2f} % | {pn:.1f} | **{ratio:.2f}×** |"
+                  for n, _, e, pn, _, ratio in equal_error_ratios(rows, what)]
     return "\n".join(lines)
 
 
@@ -155,11 +151,7 @@ def main():
     args = parser.parse_args()
     rows = run(args.hdri, args.size, not args.no_eevee)
     text = section(rows, args.hdri, args.size)
-    report = REPORT.read_text(encoding="utf-8")
-    pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.S)
-    report = pattern.sub(lambda _: text, report) if pattern.search(report) else (
-        report.rstrip("\n") + "\n\n" + text + "\n")
-    REPORT.write_text(report, encoding="utf-8")
+    fragments.write("lights", text)
     print(text)
 
 

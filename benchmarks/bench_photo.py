@@ -2,8 +2,8 @@
 
     .venv/bin/python -m benchmarks.bench_photo
 
-writes its section of benchmarks/REPORT.md (between the ``<!-- bench_photo -->`` markers,
-the rest untouched) and benchmarks/photo_error.png (matplotlib, installed by ``make bench``).
+writes its fragment of benchmarks/REPORT.md (``fragments``: "photo") and
+benchmarks/photo_error.png (matplotlib, installed by ``make bench``).
 Scenes: benchmarks/photo_scene.py (a grey ball, albedo 0.18, Diffuse BSDF, Cycles 96 px,
 32 spp). Measured:
 
@@ -23,7 +23,6 @@ Errors: RMS of E over normals and channels, divided by its mean (``core.photo.re
 """
 
 import os
-import re
 import time
 from pathlib import Path
 from tempfile import TemporaryDirectory
@@ -42,6 +41,7 @@ from sh_lighting.core.photo import relative_rms, scaled_error
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.sh import spread_normals
 
+from . import fragments
 from .photo_scene import (
     SAMPLES,
     SIZE,
@@ -55,12 +55,10 @@ from .photo_scene import (
     write_float_exr,
 )
 
-REPORT = Path(__file__).with_name("REPORT.md")
 PLOT = Path(__file__).with_name("photo_error.png")
 NOISES = (0.0, 0.01, 0.02, 0.05, 0.1, 0.2)
 DRAWS = 5  # noise draws per σ: the table gives their mean, the plot their range
 GUESSED = ("mirror", "ambient", "none")  # the priors a single photo can use
-BEGIN, END = "<!-- bench_photo -->", "<!-- /bench_photo -->"
 
 
 def error_table(photo, scene, noises, prior="mirror", seed=5, draws=1):
@@ -199,7 +197,7 @@ def _prior_rows(rows):
 
 def section(noise, priors, both, seconds):
     load = os.getloadavg()[0]
-    lines = [BEGIN, "## Light from a photograph (Match Photo)", "",
+    lines = ["## Light from a photograph (Match Photo)", "",
              f"Measured by `python -m benchmarks.bench_photo` (load average {load:.1f}; one "
              f"{SIZE} px, {SAMPLES} spp Cycles render took {seconds:.1f} s). Errors: RMS of "
              "E(n) over normals and channels / its mean. Tests: tests/blender/photo/test_photo.py "
@@ -251,7 +249,6 @@ def section(noise, priors, both, seconds):
         score = "" if guess is None else f"{100 * guess.score:.0f} %"
         lines.append(f"| {name} | {text} | {circle[0]:.2f}, {circle[1]:.2f}, "
                      f"{circle[2]:.2f} | {score} |")
-    lines.append(END)
     return "\n".join(lines)
 
 
@@ -295,11 +292,7 @@ def main():
     with TemporaryDirectory() as folder:
         noise, priors, both, seconds = measure(folder)
     text = section(noise, priors, both, seconds)
-    report = REPORT.read_text(encoding="utf-8")
-    pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.S)
-    report = pattern.sub(lambda _: text, report) if pattern.search(report) else (
-        report.rstrip("\n") + "\n\n" + text + "\n")
-    REPORT.write_text(report, encoding="utf-8")
+    fragments.write("photo", text)
     print(text)
     try:
         plot(noise)

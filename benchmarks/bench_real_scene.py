@@ -12,8 +12,8 @@ render is compared with Cycles path tracing of the original world (``REFERENCE_S
 * brightness: mean over the diffuse objects ÷ the reference's;
 * time: the render's wall time (the machine is shared: see the load average).
 
-The section between the markers in benchmarks/REPORT.md is replaced (appended the first time).
-``METHODS`` is a list: another mode is one more entry. ``TRANSFER_METHODS`` bake
+Writes its fragment of benchmarks/REPORT.md (``fragments``: "real_scene"); ``--only`` replaces
+the rows of the methods run and keeps the others. ``METHODS`` is a list: another mode is one more entry. ``TRANSFER_METHODS`` bake
 the transfer of all four objects once per HDRI (Cycles, ``TRANSFER_SAMPLES``; the ground is a
 grid, fine near the objects, so that the per-corner transfer can hold their shadows) and
 render it, with and without Extract Lights; the EEVEE frame time of Blender's own world
@@ -40,10 +40,10 @@ from sh_lighting.blender.transfer import apply as transfer_apply
 from sh_lighting.blender.transfer import bake
 from sh_lighting.blender.world.images import load_image_pixels
 
+from . import fragments
 from .render_bench import _settings
 
 HERE = Path(__file__).resolve().parent
-BEGIN, END = "<!-- bench_real_scene -->", "<!-- /bench_real_scene -->"
 HDRIS = ("sunrise", "forest")
 REFERENCE_SAMPLES = 512
 EEVEE_SAMPLES = 16
@@ -315,7 +315,7 @@ def _warm_eevee_times(scene, objects, folder, hdri, lights):
 
 
 def section(results, size, load, elapsed, notes=None):
-    lines = [BEGIN, "", "## Real scene: every Apply mode against path tracing", "",
+    lines = ["## Real scene: every Apply mode against path tracing", "",
              f"`python -m benchmarks.bench_real_scene` ({size}×{size} px, reference: Cycles "
              f"path tracing of the world at {REFERENCE_SAMPLES} spp, max 4 bounces; load "
              f"average {load}; {elapsed:.0f} s in all). Ground 40 m, a box and a Suzanne "
@@ -334,26 +334,15 @@ def section(results, size, load, elapsed, notes=None):
         lines += [f"- {note}" for note in (notes or {}).get(hdri, ())]
         if (notes or {}).get(hdri):
             lines.append("")
-    lines.append(END)
     return "\n".join(lines)
 
 
-def write(report, text):
-    old = report.read_text() if report.exists() else ""
-    if BEGIN in old and END in old:
-        head, rest = old.split(BEGIN, 1)
-        new = head + text + rest.split(END, 1)[1]
-    else:
-        new = old.rstrip() + "\n\n" + text + "\n"
-    report.write_text(new)
-
-
-def merge(report, results):
-    """Put the rows of ``results`` ({hdri: rows}) in place of the rows of the same method in
-    the tables of REPORT.md's section (under "**{hdri}.exr**"), appending a row the table
-    lacks; every other line of the section is kept (a partial run, ``--only``)."""
-    lines = report.read_text().split("\n")
-    begin, end = lines.index(BEGIN), lines.index(END)
+def merge(text, results):
+    """``text`` (the fragment) with the rows of ``results`` ({hdri: rows}) in place of the rows
+    of the same method in its tables (under "**{hdri}.exr**"), appending a row a table lacks;
+    every other line is kept (a partial run, ``--only``)."""
+    lines = text.split("\n")
+    begin, end = 0, len(lines)
     for hdri, rows in results.items():
         head = next(i for i in range(begin, end) if lines[i].startswith(f"**{hdri}.exr**"))
         first = next(i for i in range(head, end) if lines[i].startswith("| method |")) + 2
@@ -367,13 +356,12 @@ def merge(report, results):
             else:
                 lines.insert(last, text)
                 last, end = last + 1, end + 1
-    report.write_text("\n".join(lines))
+    return "\n".join(lines)
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=64)
-    parser.add_argument("--out", type=Path, default=HERE / "REPORT.md")
     parser.add_argument("--hdri", action="append", choices=HDRIS,
                         help="only this HDRI (repeatable; default: all)")
     parser.add_argument("--only", action="append", metavar="SUBSTRING",
@@ -391,10 +379,11 @@ def main(argv=None):
     print(f"load average {load} at the start, {load_end} at the end; "
           f"{time.perf_counter() - start:.0f} s", flush=True)
     if args.only or args.hdri:
-        merge(args.out, results)
+        fragments.write("real_scene", merge(fragments.read("real_scene"), results))
     else:
-        write(args.out, section(results, args.size, load, time.perf_counter() - start, notes))
-    print(f"wrote the real-scene section of {args.out}")
+        fragments.write("real_scene",
+                        section(results, args.size, load, time.perf_counter() - start, notes))
+    print("wrote the real-scene fragment of benchmarks/REPORT.md")
 
 
 if __name__ == "__main__":

@@ -17,15 +17,14 @@ allocations are traced (``tracemalloc`` peak). Stages and their floors:
 * memory floor: the decoded image's size in memory (H × W × 4 float32).
 
 Times are the minimum of ``REPEATS`` runs in the subprocess (the decode: of loads of the
-file). The machine is shared: the load average is printed beside the table. Writes its section
-of benchmarks/REPORT.md (between the ``<!-- bench_sizes -->`` markers) and
+file). The machine is shared: the load average is printed beside the table. Writes its
+fragment of benchmarks/REPORT.md (``fragments``: "sizes") and
 benchmarks/sizes.png (time and memory against pixels, log-log, with the fitted slope).
 """
 
 import argparse
 import json
 import os
-import re
 import resource
 import subprocess
 import sys
@@ -36,9 +35,9 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks import fragments
+
 HERE = Path(__file__).resolve().parent
-REPORT = HERE / "REPORT.md"
-BEGIN, END = "<!-- bench_sizes -->", "<!-- /bench_sizes -->"
 WIDTHS = (1024, 2048, 4096, 8192, 16384)
 FORMATS = ("exr", "png")
 STAGES = ("decode", "readback", "projection", "estimate", "lights", "cube", "write")
@@ -229,7 +228,7 @@ def plot(rows, path):
 
 
 def section(rows, slopes, load, skipped):
-    lines = [BEGIN, "## Sizes: each stage from 1K to 16K, against its floor", "",
+    lines = ["## Sizes: each stage from 1K to 16K, against its floor", "",
              f"`python -m benchmarks.bench_sizes` ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
              f"load average {load}; 2 shared cores). Time: the minimum of {REPEATS} runs; "
              "floor: Blender's decode of the same file (decode, readback) or one numpy pass "
@@ -251,17 +250,19 @@ def section(rows, slopes, load, skipped):
         if r["format"] == "exr" and r["stage"] in ("decode", "readback", "projection",
                                                   "estimate", "lights"):
             compute.setdefault(r["width"], {})[r["stage"]] = r["time"]
+    lines += ["`compute` of an EXR ≈ decode + readback + projection + estimate, against its "
+              "floor, Blender's decode + readback; `--lights 2` adds the lights stage:", "",
+              "| size | decode + readback s | `compute` s | × floor | `--lights 2` adds s | "
+              "× `compute` |", "|---|---|---|---|---|---|"]
     for width, t in sorted(compute.items()):
         if len(t) == 5:
             floor = t["decode"] + t["readback"]
             c = floor + t["projection"] + t["estimate"]
-            lines.append(f"- {width}×{width // 2} EXR: `compute` ≈ decode + readback + projection "
-                         f"+ estimate = {c:.2f} s = {c / floor:.2f}× Blender's decode + readback "
-                         f"({floor:.2f} s); `--lights 2` adds {t['lights']:.2f} s "
-                         f"({(c + t['lights']) / c:.2f}× compute).")
+            lines.append(f"| {width}×{width // 2} | {floor:.2f} | {c:.2f} | {c / floor:.2f} | "
+                         f"{t['lights']:.2f} | {(c + t['lights']) / c:.2f} |")
     if skipped:
-        lines.append(f"- Not run: {skipped}.")
-    lines += ["", "![time and memory against pixels](sizes.png)", END]
+        lines += ["", f"Not run: {skipped}."]
+    lines += ["", "![time and memory against pixels](sizes.png)"]
     return "\n".join(lines)
 
 
@@ -287,11 +288,7 @@ def main(argv=None):
         "16384×8192 (pass --max-width 16384: each of its processes holds Blender's 2 GB decode "
         "and the 2 GB readback, and the run takes several more minutes on the shared machine)")
     text = section(rows, slopes, load, skipped)
-    report = REPORT.read_text(encoding="utf-8")
-    pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.S)
-    report = pattern.sub(lambda _: text, report) if pattern.search(report) else (
-        report.rstrip("\n") + "\n\n" + text + "\n")
-    REPORT.write_text(report, encoding="utf-8")
+    fragments.write("sizes", text)
     (HERE / "sizes.json").write_text(json.dumps(rows, indent=1), encoding="utf-8")
     print(text)
 

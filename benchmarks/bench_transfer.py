@@ -1,6 +1,7 @@
 """Transfer: bake error against bake samples, bake seconds per 10k vertices, and
-Cycles at equal error (transfer at 1 sample against path tracing). Prints a Markdown section
-for benchmarks/REPORT.md. Run: ``python -m benchmarks.bench_transfer [--eevee]``, or
+Cycles at equal error (transfer at 1 sample against path tracing). Writes its fragments of
+benchmarks/REPORT.md (``fragments``: "transfer", "transfer_equal_error").
+Run: ``python -m benchmarks.bench_transfer [--eevee]``, or
 ``--equal-error [--size N]`` for the equal-error comparison alone (160 px by default).
 
 Scene (tests/transfer_scenes.py): a 4 m ground in 24 × 24 quads and a 1 m box (6 × 6 quads a
@@ -21,6 +22,7 @@ import numpy as np
 sys.path[:0] = [str(Path(__file__).resolve().parents[1] / "tests")]
 import blender_scenes as scenes  # noqa: E402
 import transfer_scenes as ts  # noqa: E402
+from benchmarks import fragments  # noqa: E402
 from sh_lighting.blender.transfer import bake  # noqa: E402
 
 TMP = Path(tempfile.mkdtemp(prefix="bench_transfer_"))
@@ -119,7 +121,7 @@ def main(eevee=False):
               f"{info.vertices} vertices ({info.corners} corners) at {info.samples} samples: "
               f"{info.seconds:.1f} s = **{per_10k:.1f} s per 10k vertices** "
               f"({info.seconds / info.corners * 4e4:.1f} s per 40k corners); per basis function "
-              + ", ".join(f"{s:.1f}" for s in info.basis_seconds) + f" s; load average now {load()}.", ""]
+              + ", ".join(f"{s:.1f}" for s in info.basis_seconds) + " s.", ""]
 
     if eevee:
         scene, ground, box = scene_for()
@@ -142,6 +144,7 @@ def main(eevee=False):
                   f"{100 * ts.relative_rmse(rgb, reference_c, mask):.2f} % against Cycles path "
                   f"tracing 2048 spp, brightness {rgb[mask].mean() / reference_c[mask].mean():.4f}, "
                   f"{seconds:.1f} s (first shader compile included).", ""]
+    fragments.write("transfer", "\n".join(lines))
     print("\n".join(lines))
 
 
@@ -172,7 +175,9 @@ def equal_error(size=160, ground_cuts=64, box_cuts=8, repeats=2):
     t1, t0 = np.polyfit(spp, [times[n] for n in counts], 1)
     equal = (a / errors[1]) ** 2
     equal_seconds = t0 + t1 * equal
-    lines = [f"{size} × {size} px, ground {ground_cuts} × {ground_cuts} quads, {info.vertices} "
+    lines = [f"### Transfer at equal error, {size} × {size} px", "",
+             f"`python -m benchmarks.bench_transfer --equal-error --size {size}`: "
+             f"{size} × {size} px, ground {ground_cuts} × {ground_cuts} quads, {info.vertices} "
              f"vertices, bake {info.seconds:.1f} s, reference 2048 spp {ref_seconds:.1f} s, "
              f"renders interleaved, best of {repeats}; load at the end {load()}:", "",
              "| method | spp | error | render s |", "|---|---|---|---|",
@@ -183,6 +188,7 @@ def equal_error(size=160, ground_cuts=64, box_cuts=8, repeats=2):
               f"spp, {equal_seconds:.2f} s: **{equal_seconds / times[1]:.1f}×** the transfer's "
               f"{times[1]:.2f} s (bake {info.seconds:.1f} s = {info.seconds / equal_seconds:.1f} "
               "such path-traced frames)."]
+    fragments.write("transfer_equal_error", "\n".join(lines))
     print("\n".join(lines))
 
 

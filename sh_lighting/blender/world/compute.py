@@ -2,7 +2,8 @@
 
 No cache: Compute is an explicit button press, reading a world image costs milliseconds
 (7-12 ms for the 1024×512 HDRIs bundled with Blender, 0.1-0.2 s at 4096×2048) and a capture
-of a procedural world about 3 s at the default width (benchmarks/REPORT.md §4); the cache
+of a procedural world about 3 s at the default width (benchmarks/REPORT.md, "the world
+cache"); the cache
 that reused results while the world was unchanged cost more than a fresh compute on a packed
 image (it hashed every byte) and ~260 lines of signatures.
 """

@@ -227,7 +227,7 @@ def test_exports_are_linear_rec709_and_presets_come_back(tmp_path, addon):
 
 @needs_working_spaces
 def test_compute_again_follows_a_switched_working_space(tmp_path):
-    """Compute has no cache (benchmarks/REPORT.md §5): computing again after switching the
+    """Compute has no cache (benchmarks/REPORT.md, "the world cache"): computing again after switching the
     working space gives that space's coefficients."""
     from sh_lighting.blender.world import reader as world
 
