@@ -161,14 +161,27 @@ EULER = (0.3, -0.2, 1.1)
 STRENGTH = 1.5
 
 
-def environment_world(scene, path, strength=1.0, rotation=None):
-    """[Texture Coordinate → Mapping →] Environment Texture → Background → World Output."""
-    world = bpy.data.worlds.new("Design")
-    tree = compat.ensure_node_tree(world)
+def new_world(name):
+    """A world with its default Background → World Output tree (4.2 needs use_nodes)."""
+    world = bpy.data.worlds.new(name)
+    compat.ensure_node_tree(world)
+    return world
+
+
+def environment_world(scene, image, strength=1.0, rotation=None, *,
+                      projection="EQUIRECTANGULAR", interpolation="Linear", name="Env"):
+    """``scene``'s world: [Texture Coordinate → Mapping →] Environment Texture → Background →
+    World Output. ``image``: an Image, a file path (loaded), or None (a texture without one)."""
+    world = new_world(name)
+    tree = world.node_tree
     background = tree.nodes["Background"]
     background.inputs["Strength"].default_value = strength
     texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(path)
+    if isinstance(image, (str, Path)):
+        image = bpy.data.images.load(str(image))
+    texture.image = image
+    texture.projection = projection
+    texture.interpolation = interpolation
     tree.links.new(texture.outputs["Color"], background.inputs["Color"])
     if rotation is not None:
         add_mapping(world, rotation)

@@ -8,6 +8,7 @@ import bpy
 import numpy as np
 import pytest
 from blender_files import write_constant_exr
+from blender_scenes import environment_world
 from numpy.testing import assert_array_equal
 
 from sh_lighting import api
@@ -41,15 +42,7 @@ def test_a_world_beyond_float32_is_refused_not_rendered_black(addon, tmp_path):
     """1e38 texels: L00 = 2√π·1e38 = 3.5e38 would become infinite in Blender's float32."""
     scene = bpy.context.scene
     api.set_coefficients(scene, KNOWN)
-    world = bpy.data.worlds.new("Huge")
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(write_constant_exr(tmp_path / "huge.exr", (1e38,) * 3))
-    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    scene.world = world
+    environment_world(scene, write_constant_exr(tmp_path / "huge.exr", (1e38,) * 3), name="Huge")
     with pytest.raises(ValueError, match=r"L00 channel R is 3.54491e\+38, beyond the float32"):
         api.compute_from_world(scene)
     assert_array_equal(api.get_coefficients(scene), KNOWN)
@@ -174,15 +167,9 @@ def test_a_driven_strength_is_read_as_the_next_render_shows_it(addon, tmp_path):
     """Strength driven by scene["k"]; a render, then scene["k"] set from
     Python and view_layer.update(): Compute read the old Strength (1 instead of 3)."""
     scene = bpy.context.scene
-    world = bpy.data.worlds.new("Driven")
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(write_constant_exr(tmp_path / "c.exr", (0.5,) * 3))
-    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    scene.world = world
+    world = environment_world(scene, write_constant_exr(tmp_path / "c.exr", (0.5,) * 3),
+                              name="Driven")
+    background = world.node_tree.nodes["Background"]
     scene["k"] = 1.0
     driver = background.inputs["Strength"].driver_add("default_value").driver
     driver.type = "SCRIPTED"

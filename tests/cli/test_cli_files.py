@@ -430,11 +430,11 @@ def test_a_batch_refused_before_any_work_creates_no_folder(tmp_path, refusal):
 def test_compute_of_a_blend_takes_nonfinite_zero_and_names_the_option(tmp_path):
     """--nonfinite was ignored for a .blend and the error said "pass
     nonfinite='zero'", which neither the command line nor the API accepted."""
-    from cli_runs import build_blend
+    from farm_scene import build_scene
 
     pixels = constant_pixels(SKY)
     pixels[2, 3, 1] = np.nan
-    blend = build_blend(tmp_path / "nan.blend", write_exr(tmp_path / "nan.exr", pixels))
+    blend = build_scene(tmp_path / "nan.blend", write_exr(tmp_path / "nan.exr", pixels), 4)
     line = one_error_line(run("compute", blend))
     assert "1 non-finite (NaN or Inf) texels at (row 2, column 3)" in line
     assert "pass --nonfinite zero to treat those texels as black" in line

@@ -1,11 +1,13 @@
-"""The user's files: replaced files keep mode, owner and links; leftovers of a kill are found;
-preset reading takes only small regular files and turns every decoding failure into one
-PresetError naming the file."""
+"""The user's files: writes are all or nothing and never replace a file unless asked;
+replaced files keep mode, owner and links; leftovers of a kill are found; preset reading
+takes only small regular files and turns every decoding failure into one PresetError naming
+the file."""
 
 import errno
 import os
 import stat
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +21,156 @@ OTHER = COEFFS + 1.0
 
 def mode(path):
     return stat.S_IMODE(os.stat(path).st_mode)
+
+
+def leftovers(folder):
+    """Hidden temporary files a failed write could have left behind."""
+    return sorted(p.name for p in Path(folder).iterdir() if p.name.startswith("."))
+
+
+# --- writing: all or nothing, never over a file unless asked ----------------------------
+
+OLD_TEXT = "previous content\n"
+
+
+@pytest.fixture
+def existing(tmp_path):
+    path = tmp_path / "light.json"
+    path.write_text(OLD_TEXT)
+    return path
+
+
+def test_existing_file_is_not_overwritten_by_default(existing):
+    with pytest.raises(FileExistsError, match=r"already exists.*overwrite=True"):
+        write_preset(existing, COEFFS)
+    assert existing.read_text() == OLD_TEXT
+    assert list(existing.parent.iterdir()) == [existing]
+
+
+def test_overwrite_replaces(existing):
+    write_preset(existing, COEFFS, overwrite=True)
+    assert np.array_equal(read_preset(existing)[0], COEFFS)
+    assert list(existing.parent.iterdir()) == [existing]
+
+
+def test_new_file_gets_ordinary_permissions(tmp_path):
+    path = write_preset(tmp_path / "new.json", COEFFS)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+class FailingStream:
+    """Wraps a file object; writes half of the text, then fails like a full disk."""
+
+    def __init__(self, stream):
+        self.stream = stream
+
+    def write(self, text):
+        self.stream.write(text[: len(text) // 2])
+        self.stream.flush()
+        raise OSError(28, "No space left on device")
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.stream.close()
+
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
+
+
+REAL_FDOPEN = os.fdopen
+
+
+def failing_fdopen(*args, **kwargs):
+    return FailingStream(REAL_FDOPEN(*args, **kwargs))
+
+
+def raise_os_error(*args, **kwargs):
+    raise OSError("simulated failure")
+
+
+def raise_interrupt(*args, **kwargs):
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize(
+    "target, replacement, error",
+    [
+        ("fdopen", failing_fdopen, OSError),  # half the text written, then a full disk
+        ("fsync", raise_os_error, OSError),  # everything written, flushing to disk fails
+        ("replace", raise_os_error, OSError),  # the final move fails
+        ("replace", raise_interrupt, KeyboardInterrupt),  # the user interrupts at the last step
+    ],
+)
+@pytest.mark.parametrize("overwrite", [False, True])
+def test_a_failed_write_leaves_the_destination_untouched_and_no_temporary_file(
+    tmp_path, monkeypatch, target, replacement, error, overwrite
+):
+    path = tmp_path / "light.json"
+    if overwrite:
+        path.write_text(OLD_TEXT)
+    monkeypatch.setattr(atomic.os, target, replacement)
+    with pytest.raises(error):
+        write_preset(path, COEFFS, overwrite=overwrite)
+    monkeypatch.undo()
+    if overwrite:
+        assert path.read_text() == OLD_TEXT
+        assert list(tmp_path.iterdir()) == [path]
+    else:
+        assert list(tmp_path.iterdir()) == []
+
+
+def test_a_file_appearing_during_the_write_is_not_replaced(tmp_path, monkeypatch):
+    path = tmp_path / "light.json"
+    real_fsync = os.fsync
+
+    def fsync_then_someone_creates_the_file(fd):
+        real_fsync(fd)
+        path.write_text(OLD_TEXT)
+
+    monkeypatch.setattr(atomic.os, "fsync", fsync_then_someone_creates_the_file)
+    with pytest.raises(FileExistsError, match="appeared while it was being written"):
+        write_preset(path, COEFFS)
+    assert path.read_text() == OLD_TEXT
+    assert list(tmp_path.iterdir()) == [path]
+
+
+def test_missing_folder_is_reported(tmp_path):
+    with pytest.raises(FileNotFoundError, match="does not exist: create it first"):
+        write_preset(tmp_path / "no" / "such" / "light.json", COEFFS)
+
+
+def test_failed_atomic_write_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch):
+    path = tmp_path / "p.json"
+    path.write_text("old")
+
+    def broken_replace(src, dst):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(atomic.os, "replace", broken_replace)
+    with pytest.raises(OSError, match="disk full"):
+        atomic.write_text_atomic(path, "new", overwrite=True)
+    with pytest.raises(OSError, match="disk full"):
+        with atomic.atomic_destination(path, overwrite=True) as temporary:
+            temporary.write_text("new")
+    assert path.read_text() == "old"
+    assert leftovers(tmp_path) == []
+
+
+def test_atomic_destination_refuses_missing_output_and_existing_file(tmp_path):
+    with pytest.raises(FileNotFoundError, match="nothing was written"):
+        with atomic.atomic_destination(tmp_path / "out.bin"):
+            pass  # the writer wrote nothing
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "x").write_text("a")
+    with pytest.raises(FileExistsError, match="already exists"):
+        with atomic.atomic_destination(tmp_path / "x"):
+            pytest.fail("must refuse before the block runs")
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        atomic.write_text_atomic(tmp_path / "no" / "dir.json", "x")
 
 
 # --- replacing a file keeps what the user set --------------------------------------------

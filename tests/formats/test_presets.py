@@ -1,7 +1,6 @@
 """The JSON preset format: round trips, every refusal with its message, atomic writes."""
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
@@ -9,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sh_lighting.formats import atomic, presets
+from sh_lighting.formats import presets
 from sh_lighting.core.coefficients import FLOAT32_MAX
 from sh_lighting.formats.presets import (
     PresetError,
@@ -216,121 +215,6 @@ def test_writing_refuses_unwritable_metadata(tmp_path):
     with pytest.raises(PresetError, match="metadata cannot be written as JSON"):
         write_preset(tmp_path / "x.json", COEFFS, {"extra": object()})
     assert list(tmp_path.iterdir()) == []
-
-
-# --- atomic writes -------------------------------------------------------------------------
-
-OLD_TEXT = "previous content\n"
-
-
-@pytest.fixture
-def existing(tmp_path):
-    path = tmp_path / "light.json"
-    path.write_text(OLD_TEXT)
-    return path
-
-
-def test_existing_file_is_not_overwritten_by_default(existing):
-    with pytest.raises(FileExistsError, match=r"already exists.*overwrite=True"):
-        write_preset(existing, COEFFS)
-    assert existing.read_text() == OLD_TEXT
-    assert list(existing.parent.iterdir()) == [existing]
-
-
-def test_overwrite_replaces(existing):
-    write_preset(existing, COEFFS, overwrite=True)
-    assert np.array_equal(read_preset(existing)[0], COEFFS)
-    assert list(existing.parent.iterdir()) == [existing]
-
-
-def test_new_file_gets_ordinary_permissions(tmp_path):
-    path = write_preset(tmp_path / "new.json", COEFFS)
-    umask = os.umask(0)
-    os.umask(umask)
-    assert path.stat().st_mode & 0o777 == 0o666 & ~umask
-
-
-class FailingStream:
-    """Wraps a file object; writes half of the text, then fails like a full disk."""
-
-    def __init__(self, stream):
-        self.stream = stream
-
-    def write(self, text):
-        self.stream.write(text[: len(text) // 2])
-        self.stream.flush()
-        raise OSError(28, "No space left on device")
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.stream.close()
-
-    def __getattr__(self, name):
-        return getattr(self.stream, name)
-
-
-REAL_FDOPEN = os.fdopen
-
-
-def failing_fdopen(*args, **kwargs):
-    return FailingStream(REAL_FDOPEN(*args, **kwargs))
-
-
-def raise_os_error(*args, **kwargs):
-    raise OSError("simulated failure")
-
-
-def raise_interrupt(*args, **kwargs):
-    raise KeyboardInterrupt
-
-
-@pytest.mark.parametrize(
-    "target, replacement, error",
-    [
-        ("fdopen", failing_fdopen, OSError),  # half the text written, then a full disk
-        ("fsync", raise_os_error, OSError),  # everything written, flushing to disk fails
-        ("replace", raise_os_error, OSError),  # the final move fails
-        ("replace", raise_interrupt, KeyboardInterrupt),  # the user interrupts at the last step
-    ],
-)
-@pytest.mark.parametrize("overwrite", [False, True])
-def test_a_failed_write_leaves_the_destination_untouched_and_no_temporary_file(
-    tmp_path, monkeypatch, target, replacement, error, overwrite
-):
-    path = tmp_path / "light.json"
-    if overwrite:
-        path.write_text(OLD_TEXT)
-    monkeypatch.setattr(atomic.os, target, replacement)
-    with pytest.raises(error):
-        write_preset(path, COEFFS, overwrite=overwrite)
-    monkeypatch.undo()
-    if overwrite:
-        assert path.read_text() == OLD_TEXT
-        assert list(tmp_path.iterdir()) == [path]
-    else:
-        assert list(tmp_path.iterdir()) == []
-
-
-def test_a_file_appearing_during_the_write_is_not_replaced(tmp_path, monkeypatch):
-    path = tmp_path / "light.json"
-    real_fsync = os.fsync
-
-    def fsync_then_someone_creates_the_file(fd):
-        real_fsync(fd)
-        path.write_text(OLD_TEXT)
-
-    monkeypatch.setattr(atomic.os, "fsync", fsync_then_someone_creates_the_file)
-    with pytest.raises(FileExistsError, match="appeared while it was being written"):
-        write_preset(path, COEFFS)
-    assert path.read_text() == OLD_TEXT
-    assert list(tmp_path.iterdir()) == [path]
-
-
-def test_missing_folder_is_reported(tmp_path):
-    with pytest.raises(FileNotFoundError, match="does not exist: create it first"):
-        write_preset(tmp_path / "no" / "such" / "light.json", COEFFS)
 
 
 # --- the presets shipped in the repository -------------------------------------------------

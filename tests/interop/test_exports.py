@@ -14,6 +14,7 @@ import bpy
 import numpy as np
 import pytest
 from blender_files import write_exr
+from blender_scenes import environment_world
 from lightings import GLTF_NORMALS, NORMALS, TOLERANCE, deviation, texel_map
 
 from sh_lighting.blender.data import scene_data
@@ -39,21 +40,7 @@ def addon():
 def texel_world(folder):
     """A world showing the one-texel map through a Mapping rotation at Strength 2."""
     exr = write_exr(folder / "texel.exr", texel_map()[0].astype(np.float32))
-    world = bpy.data.worlds.new("Texel")
-    if world.node_tree is None:  # Blender < 5 makes the tree on use_nodes (deprecated in 5)
-        world.use_nodes = True
-    tree = world.node_tree
-    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    background.inputs["Strength"].default_value = STRENGTH
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(str(exr))
-    mapping = tree.nodes.new("ShaderNodeMapping")
-    mapping.inputs["Rotation"].default_value = ROTATION
-    coords = tree.nodes.new("ShaderNodeTexCoord")
-    tree.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
-    tree.links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    bpy.context.scene.world = world
+    environment_world(bpy.context.scene, exr, STRENGTH, ROTATION, name="Texel")
     return exr
 
 

@@ -159,13 +159,8 @@ def lit_sphere(scene, size=48):
 
 
 def constant_world(scene, tmp_path, rgb=(0.4, 0.35, 0.3)):
-    path = write_constant_exr(tmp_path / "constant.exr", rgb)
-    world = bpy.data.worlds.new("Constant")
-    tree = compat.ensure_node_tree(world)
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(path)
-    tree.links.new(texture.outputs["Color"], tree.nodes["Background"].inputs["Color"])
-    scene.world = world
+    return environment_world(scene, write_constant_exr(tmp_path / "constant.exr", rgb),
+                             name="Constant")
 
 
 def rendered(scene, path, expected, what):

@@ -17,12 +17,13 @@ import bpy
 import numpy as np
 import pytest
 from blender_files import SCRIPT, WORLD, write_constant_exr
+from blender_scenes import environment_world
 from numpy.testing import assert_allclose, assert_array_equal
 
 from sh_lighting.blender.data import compat, scene_data
 from sh_lighting.blender.ui import panels, presets as presets_ui
 from sh_lighting.blender.presets import preset_io
-from sh_lighting.formats import atomic, interop
+from sh_lighting.formats import interop
 from sh_lighting.formats.presets import PresetError, read_preset, write_preset
 from tools import make_presets, package
 from ui_layout import RecordingLayout
@@ -147,16 +148,7 @@ def test_import_keeps_the_reset_values(scene, tmp_path):
 def test_metadata_names_the_world_image_while_the_values_are_the_computed_ones(addon, tmp_path):
     scene = bpy.context.scene
     exr = write_constant_exr(tmp_path / "sky.exr", (0.5, 1.0, 2.0))
-    world = bpy.data.worlds.new("W")
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    background.inputs["Strength"].default_value = 3.0
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(str(exr))
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    scene.world = world
+    background = environment_world(scene, exr, 3.0, name="W").node_tree.nodes["Background"]
     assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
 
     metadata = read_preset(preset_io.export_preset(scene, tmp_path / "a.json"))[1]
@@ -181,15 +173,8 @@ def test_gltf_export_refuses_to_pair_one_image_s_coefficients_with_another_s_cub
     from sh_lighting.blender.world import compute
 
     scene = bpy.context.scene
-    world = bpy.data.worlds.new("W")
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(str(write_constant_exr(tmp_path / "a.exr", (1,) * 3)))
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    scene.world = world
+    world = environment_world(scene, write_constant_exr(tmp_path / "a.exr", (1,) * 3), name="W")
+    texture = world.node_tree.nodes["Environment Texture"]
     assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
     assert compute.world_match(scene).source is not None
     texture.image = bpy.data.images.load(str(write_constant_exr(tmp_path / "b.exr", (4,) * 3)))
@@ -208,7 +193,7 @@ def test_gltf_export_refuses_to_pair_one_image_s_coefficients_with_another_s_cub
     assert '"specular_source": "world image"' in text and "b.exr" in text
 
 
-# --- refusals and atomic writes ------------------------------------------------------------
+# --- refusals ---------------------------------------------------------------------------
 
 
 @pytest.mark.parametrize("fmt", FORMATS)
@@ -226,36 +211,6 @@ def test_export_refuses_to_overwrite_unless_asked(scene, tmp_path, fmt):
     ) == {"FINISHED"}
     assert_allclose(read_back(path, fmt), KNOWN, atol=ROUND_TRIP)
     assert leftovers(tmp_path) == []
-
-
-def test_failed_atomic_write_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch):
-    path = tmp_path / "p.json"
-    path.write_text("old")
-
-    def broken_replace(src, dst):
-        raise OSError("disk full")
-
-    monkeypatch.setattr(os, "replace", broken_replace)
-    with pytest.raises(OSError, match="disk full"):
-        atomic.write_text_atomic(path, "new", overwrite=True)
-    with pytest.raises(OSError, match="disk full"):
-        with atomic.atomic_destination(path, overwrite=True) as temporary:
-            temporary.write_text("new")
-    assert path.read_text() == "old"
-    assert leftovers(tmp_path) == []
-
-
-def test_atomic_destination_refuses_missing_output_and_existing_file(tmp_path):
-    with pytest.raises(FileNotFoundError, match="nothing was written"):
-        with atomic.atomic_destination(tmp_path / "out.bin"):
-            pass  # the writer wrote nothing
-    assert list(tmp_path.iterdir()) == []
-    (tmp_path / "x").write_text("a")
-    with pytest.raises(FileExistsError, match="already exists"):
-        with atomic.atomic_destination(tmp_path / "x"):
-            pytest.fail("must refuse before the block runs")
-    with pytest.raises(FileNotFoundError, match="does not exist"):
-        atomic.write_text_atomic(tmp_path / "no" / "dir.json", "x")
 
 
 def test_export_without_coefficients_is_refused_with_a_reason(addon, tmp_path):

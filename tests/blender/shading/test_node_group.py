@@ -18,7 +18,15 @@ import pytest
 
 from benchmarks.render_bench import add_camera
 from blender_files import SCRIPT
-from blender_scenes import black_world, check_against_core, read_exr, render, setup_render, unpack
+from blender_scenes import (
+    black_world,
+    check_against_core,
+    environment_world,
+    read_exr,
+    render,
+    setup_render,
+    unpack,
+)
 from sh_lighting.blender.data import compat, scene_data
 from sh_lighting.blender.shading import materials, nodes
 from sh_lighting.core import irradiance, project_equirect, reference_irradiance
@@ -365,13 +373,7 @@ def test_sh_render_vs_path_traced_hdri(tmp_path, hdri_dir):
     scene = bpy.context.scene
 
     # Path-traced reference: white Diffuse BSDF under the HDRI.
-    world = bpy.data.worlds.new("HDRI")
-    tree = compat.ensure_node_tree(world)
-    environment = tree.nodes.new("ShaderNodeTexEnvironment")
-    environment.image = image
-    tree.links.new(environment.outputs["Color"], tree.nodes["Background"].inputs["Color"])
-    tree.nodes["Background"].inputs["Strength"].default_value = 1.0
-    scene.world = world
+    environment_world(scene, image, 1.0, name="HDRI")
     traced_material = bpy.data.materials.new("Traced")
     tree = compat.ensure_node_tree(traced_material)
     tree.nodes.remove(tree.nodes["Principled BSDF"])

@@ -32,18 +32,9 @@ KNOWN = np.arange(27, dtype=np.float64).reshape(9, 3) / 10.0 - 1.0  # signed, so
 
 
 
-def image_world(scene, path, strength=STRENGTH, name="SH Test World"):
+def image_world(scene, path, strength=STRENGTH):
     """Environment Texture (image at ``path``, or none) -> Background -> World Output."""
-    world = bpy.data.worlds.new(name)
-    tree = compat.ensure_node_tree(world)
-    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    background.inputs["Strength"].default_value = strength
-    env = tree.nodes.new("ShaderNodeTexEnvironment")
-    if path is not None:
-        env.image = bpy.data.images.load(str(path))
-    tree.links.new(env.outputs["Color"], background.inputs["Color"])
-    scene.world = world
-    return world
+    return environment_world(scene, path, strength)
 
 
 def expected_constant(rgb=COLOUR, strength=STRENGTH):

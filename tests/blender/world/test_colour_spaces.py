@@ -17,6 +17,7 @@ import mathutils
 import numpy as np
 import pytest
 from blender_files import write_png
+from blender_scenes import environment_world
 
 from sh_lighting.blender.data import compat
 from sh_lighting.blender.world.capture import capture_world
@@ -42,15 +43,9 @@ def set_working_space(name):
 
 
 def image_world(image):
-    world = bpy.data.worlds.new("Env")
-    compat.ensure_node_tree(world)
-    tree = world.node_tree
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = image
-    texture.interpolation = "Closest"  # the capture then shows the decoded texels exactly
-    tree.links.new(texture.outputs["Color"], tree.nodes["Background"].inputs["Color"])
-    bpy.context.scene.world = world
-    return world
+    """``image`` as the scene's world, read texel by texel ("Closest": the capture then shows
+    the decoded texels exactly)."""
+    return environment_world(bpy.context.scene, image, interpolation="Closest")
 
 
 def cycles(world, width):
@@ -227,8 +222,8 @@ def test_exports_are_linear_rec709_and_presets_come_back(tmp_path, addon):
 
 @needs_working_spaces
 def test_compute_again_follows_a_switched_working_space(tmp_path):
-    """Compute has no cache (benchmarks/REPORT.md, "the world cache"): computing again after switching the
-    working space gives that space's coefficients."""
+    """Compute has no cache (benchmarks/REPORT.md, "the world cache"): computing again after
+    switching the working space gives that space's coefficients."""
     from sh_lighting.blender.world import reader as world
 
     set_working_space("Linear Rec.709")

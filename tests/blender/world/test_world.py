@@ -16,9 +16,8 @@ import bpy
 import numpy as np
 import pytest
 from blender_files import write_exr, write_png
-from blender_scenes import add_mapping
+from blender_scenes import environment_world, new_world
 
-from sh_lighting.blender.data import compat
 from sh_lighting.blender.world import reader as world_module
 from sh_lighting.blender.world.capture import capture_world
 from sh_lighting.blender.world.images import image_pixels
@@ -39,16 +38,12 @@ def rel_err(a, b):
     return np.abs(np.asarray(a) - np.asarray(b)).max() / np.abs(b).max()
 
 
-# -- building worlds ---------------------------------------------------------------------------
+# -- building worlds (blender_scenes.environment_world, new_world) -----------------------------
 
 
-def new_world(name):
-    """A world with its default Background → World Output tree (4.2 needs use_nodes)."""
-    world = bpy.data.worlds.new(name)
-    compat.ensure_node_tree(world)
-    return world
-
-
+def world_exr(tmp_path, pixels):
+    """``pixels`` written to tmp_path/world.exr: the path."""
+    return write_exr(tmp_path / "world.exr", pixels)
 
 
 def smooth_radiance(directions):
@@ -67,29 +62,6 @@ def smooth_equirect(height, width):
     pixels = np.ones((height, width, 4), dtype=np.float32)
     pixels[..., :3] = smooth_radiance(texel_directions(height, width))
     return pixels
-
-
-def environment_world(image, projection="EQUIRECTANGULAR", strength=1.0, rotation=None,
-                      interpolation="Linear"):
-    """Scene world: [Texture Coordinate → Mapping →] Environment Texture → Background → Output."""
-    world = new_world("Env")
-    tree = world.node_tree
-    background = tree.nodes["Background"]
-    background.inputs["Strength"].default_value = strength
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = image
-    texture.projection = projection
-    texture.interpolation = interpolation
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    if rotation is not None:
-        add_mapping(world, rotation)
-    bpy.context.scene.world = world
-    return world
-
-
-def exr_world(tmp_path, pixels, **options):
-    image = bpy.data.images.load(write_exr(tmp_path / "world.exr", pixels))
-    return environment_world(image, **options)
 
 
 def captured(world, width, samples=16, refine=True):
@@ -140,7 +112,7 @@ def test_equirect_exr_is_core_projection_times_strength(tmp_path):
     rng = np.random.default_rng(1)
     pixels = (rng.random((16, 32, 4)) * 5.0 - 0.5).astype(np.float32)  # negatives are data
     pixels[..., 3] = 1.0
-    exr_world(tmp_path, pixels, strength=2.5)
+    environment_world(bpy.context.scene, world_exr(tmp_path, pixels), strength=2.5)
     before = snapshot()
     coeffs, info = world_coefficients(bpy.context.scene)
     assert snapshot() == before
@@ -159,7 +131,8 @@ def test_capture_reproduces_the_image_texel_for_texel(tmp_path):
     rng = np.random.default_rng(2)
     pixels = rng.random((16, 32, 4)).astype(np.float32)
     pixels[..., 3] = 1.0
-    world = exr_world(tmp_path, pixels, interpolation="Closest")
+    world = environment_world(bpy.context.scene, world_exr(tmp_path, pixels),
+                              interpolation="Closest")
     before = snapshot()
     capture = capture_world(world, 32, samples=1)
     assert snapshot() == before
@@ -176,8 +149,9 @@ def test_mapping_rotation_about_z_by_whole_columns_is_a_column_roll(tmp_path):
     height, width, k = 16, 32, 5
     pixels = rng.random((height, width, 4)).astype(np.float32)
     pixels[..., 3] = 1.0
-    world = exr_world(tmp_path, pixels, rotation=(0.0, 0.0, 2.0 * pi * k / width),
-                      interpolation="Closest")
+    world = environment_world(bpy.context.scene, world_exr(tmp_path, pixels),
+                              rotation=(0.0, 0.0, 2.0 * pi * k / width),
+                              interpolation="Closest")
     rolled = np.roll(pixels, k, axis=1)
     seen = capture_world(world, width, samples=1)
     assert np.abs(seen[..., :3] - rolled[..., :3]).max() < 1e-5
@@ -196,7 +170,8 @@ def test_general_mapping_rotation_is_the_image_turned_by_the_inverse(tmp_path):
     """
     angles = (0.3, -0.5, 1.1)
     pixels = smooth_equirect(32, 64)
-    world = exr_world(tmp_path, pixels, rotation=angles)
+    world = environment_world(bpy.context.scene, world_exr(tmp_path, pixels),
+                              rotation=angles)
     coeffs, info = world_coefficients(bpy.context.scene)
     assert info.source == "image" and info.rotation == pytest.approx(angles)
     reference = captured(world, 128)
@@ -236,7 +211,7 @@ def test_srgb_png_is_linearised_like_cycles(tmp_path, interpolation):
         encoded = np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * linear ** (1 / 2.4) - 0.055)
         values = np.clip(np.round(encoded * 255.0), 0, 255)
     image = bpy.data.images.load(write_png(tmp_path / "p.png", values))
-    world = environment_world(image, interpolation=interpolation)
+    world = environment_world(bpy.context.scene, image, interpolation=interpolation)
     coeffs, info = world_coefficients(bpy.context.scene)
     assert info.source == "image"
     assert rel_err(coeffs, project_equirect(srgb_to_linear(values / 255.0))) < 1e-6
@@ -250,7 +225,7 @@ def test_linear_8bit_png_is_used_as_is(tmp_path, space):
     values = byte_values(16, 32)
     image = bpy.data.images.load(write_png(tmp_path / "p.png", values))
     image.colorspace_settings.name = space
-    world = environment_world(image, interpolation="Closest")
+    world = environment_world(bpy.context.scene, image, interpolation="Closest")
     coeffs, info = world_coefficients(bpy.context.scene)
     assert info.source == "image"
     assert rel_err(coeffs, project_equirect(values / 255.0)) < 1e-6
@@ -261,7 +236,7 @@ def test_other_8bit_colour_space_and_transparency_are_captured(tmp_path):
     values = byte_values(16, 32)
     image = bpy.data.images.load(write_png(tmp_path / "p.png", values))
     image.colorspace_settings.name = "Display P3"  # no Blender conversion function for it
-    world = environment_world(image, interpolation="Closest")
+    world = environment_world(bpy.context.scene, image, interpolation="Closest")
     coeffs, info = world_coefficients(bpy.context.scene, capture_width=64)
     assert info.source == "capture" and "Display P3" in info.reason
     assert info.capture_width == 64
@@ -270,7 +245,7 @@ def test_other_8bit_colour_space_and_transparency_are_captured(tmp_path):
     alpha = np.full((16, 32), 255)
     alpha[:, :4] = 100
     transparent = bpy.data.images.load(write_png(tmp_path / "a.png", values, alpha=alpha))
-    environment_world(transparent)
+    environment_world(bpy.context.scene, transparent)
     _, info = world_coefficients(bpy.context.scene, capture_width=32)
     assert info.source == "capture" and "transparent" in info.reason
 
@@ -278,7 +253,8 @@ def test_other_8bit_colour_space_and_transparency_are_captured(tmp_path):
 def test_float_image_in_another_colour_space_is_read_as_blender_converts_it(tmp_path):
     """A float image's pixels are converted to scene linear by Blender: the fast path holds."""
     pixels = smooth_equirect(16, 32)
-    world = exr_world(tmp_path, pixels, interpolation="Closest")
+    world = environment_world(bpy.context.scene, world_exr(tmp_path, pixels),
+                              interpolation="Closest")
     world.node_tree.nodes["Environment Texture"].image.colorspace_settings.name = "ACEScg"
     coeffs, info = world_coefficients(bpy.context.scene)
     assert info.source == "image"
@@ -314,7 +290,8 @@ def test_mirror_ball_matches_cycles(tmp_path, black_outside, tolerance):
     flipped left-right) is off by 43%.
     """
     pixels = mirror_ball_pixels(128, black_outside)
-    world = exr_world(tmp_path, pixels, projection="MIRROR_BALL", rotation=(0.2, 0.0, 0.7))
+    world = environment_world(bpy.context.scene, world_exr(tmp_path, pixels),
+                              projection="MIRROR_BALL", rotation=(0.2, 0.0, 0.7))
     coeffs, info = world_coefficients(bpy.context.scene)
     assert (info.source, info.projection) == ("image", "MIRROR_BALL")
     reference = captured(world, 256)
@@ -379,7 +356,8 @@ def test_capture_refines_a_small_bright_spot_even_across_the_seam(tmp_path, colu
     """
     pixels = smooth_equirect(256, 512)
     pixels[100:103, [(column + d) % 512 for d in (-1, 0, 1)], :3] += 5000.0
-    world = exr_world(tmp_path, pixels, interpolation="Closest")
+    world = environment_world(bpy.context.scene, world_exr(tmp_path, pixels),
+                              interpolation="Closest")
     exact = project_equirect(average_fine_rows(pixels, 8, 0, 32))
     before = snapshot()
     refined = project_equirect(capture_world(world, 64))
@@ -457,7 +435,8 @@ def test_unsupported_options_fall_back_to_the_capture(tmp_path, change):
     """Each option the fast path does not read sends the world to Cycles, which agrees with
     what that option means (checked for Location, which moves the lookup point)."""
     pixels = smooth_equirect(16, 32)
-    world = exr_world(tmp_path, pixels, rotation=(0.0, 0.0, 0.5))
+    world = environment_world(bpy.context.scene, world_exr(tmp_path, pixels),
+                              rotation=(0.0, 0.0, 0.5))
     tree = world.node_tree
     mapping, coordinates = tree.nodes["Mapping"], tree.nodes["Texture Coordinate"]
     if change == "location":
@@ -504,13 +483,13 @@ def break_world(case, tmp_path):
         scene.world = world
         return "not connected"
     if case == "texture without image":
-        environment_world(None)
+        environment_world(bpy.context.scene, None)
         return "has no image"
     if case == "missing file":
         path = write_exr(tmp_path / "gone.exr", smooth_equirect(4, 8))
         image = bpy.data.images.load(path)
         os.remove(path)
-        environment_world(image)
+        environment_world(bpy.context.scene, image)
         return "gone.exr"
     if case == "missing file behind a mix":
         path = write_exr(tmp_path / "gone.exr", smooth_equirect(4, 8))

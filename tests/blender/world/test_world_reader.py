@@ -9,7 +9,7 @@ import bpy
 import numpy as np
 import pytest
 from blender_files import write_exr
-from blender_scenes import add_mapping
+from blender_scenes import environment_world
 
 from sh_lighting.blender.data import compat
 from sh_lighting.blender.world.capture import capture_world
@@ -42,18 +42,9 @@ def smooth_pixels(height=32, width=64):
 
 
 def image_world(tmp_path, pixels, strength=1.0, rotation=None):
-    world = bpy.data.worlds.new("Env")
-    compat.ensure_node_tree(world)
-    tree = world.node_tree
-    background = tree.nodes["Background"]
-    background.inputs["Strength"].default_value = strength
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(write_exr(tmp_path / "world.exr", pixels))
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    if rotation is not None:
-        add_mapping(world, rotation)
-    bpy.context.scene.world = world
-    return world
+    """``pixels`` as tmp_path/world.exr, the world "Env" of the scene (``environment_world``)."""
+    return environment_world(bpy.context.scene, write_exr(tmp_path / "world.exr", pixels),
+                             strength, rotation)
 
 
 def test_an_image_world_is_an_image_source_with_its_settings(tmp_path):
