@@ -41,6 +41,8 @@ from sh_lighting.core.photo import relative_rms, scaled_error
 from sh_lighting.core.projection import project_equirect
 from sh_lighting.core.sh import spread_normals
 
+from tests.blender_files import write_exr
+
 from . import fragments
 from .photo_scene import (
     SAMPLES,
@@ -52,7 +54,6 @@ from .photo_scene import (
     render_png,
     sh_world_pixels,
     turn_camera,
-    write_float_exr,
 )
 
 PLOT = Path(__file__).with_name("photo_error.png")
@@ -155,7 +156,7 @@ def both_balls_table(front, back, chrome_path, courtyard, scene):
 
 def measure(folder):
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    world = write_float_exr(Path(folder) / "sh_world.exr", sh_world_pixels())
+    world = write_exr(Path(folder) / "sh_world.exr", sh_world_pixels())
     scene, _ = grey_ball_scene(world)
     start = time.perf_counter()
     exr = render_exr(scene, Path(folder) / "sh_photo.exr")
@@ -169,7 +170,7 @@ def measure(folder):
     priors = prior_table(png, str(hdri), scene)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     courtyard = linear(hdri)
-    chrome = write_float_exr(Path(folder) / "chrome.exr", mirror_ball_image(courtyard, 256))
+    chrome = write_exr(Path(folder) / "chrome.exr", mirror_ball_image(courtyard, 256))
     scene, _ = grey_ball_scene(chrome, "PERSP", world_projection="MIRROR_BALL")
     scene.view_settings.exposure = -1.0  # the grey ball one stop under the chrome ball
     front = render_png(scene, Path(folder) / "front.png")

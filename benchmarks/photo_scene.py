@@ -5,7 +5,8 @@ world an equirect image (or a chrome ball's mirror-ball image), the scene camera
 along +Y: orthographic (the ball's radius SIZE / ORTHO_SCALE pixels) or 85 mm at DISTANCE_85;
 ``turn_camera`` puts it on the other side (+Y looking along −Y) for a second photo.
 Exact-pixel render settings (no denoising, no dithering, Standard view, a 0.01 px filter:
-each pixel is its centre's ray).
+each pixel is its centre's ray). The world and the render settings are the tests' (one copy,
+tests/blender_scenes.py); EXRs are written by tests/blender_files.py.
 """
 
 import bpy
@@ -15,6 +16,7 @@ from sh_lighting.blender.data import compat
 from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core.equirect import texel_directions
 from sh_lighting.core.sh import sh_basis
+from tests.blender_scenes import environment_world, setup_render
 
 LIGHT = 0.5 * np.array(
     [[3.0, 2.5, 2.0], [0.5, 0.4, 0.2], [1.1, 1.0, 0.9], [-0.4, -0.2, 0.0], [0.2, 0.1, 0.0],
@@ -37,15 +39,8 @@ def grey_ball_scene(world_path, projection="ORTHO", strength=1.0, samples=SAMPLE
     """(scene, the ball's material) in the current (empty) file; see the module docstring.
     ``world_projection``: the Environment Texture's, "MIRROR_BALL" for a chrome ball's."""
     scene = bpy.context.scene
-    world = bpy.data.worlds.new("Photo world")
-    tree = compat.ensure_node_tree(world)
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = bpy.data.images.load(str(world_path))
-    texture.projection = world_projection
-    background = tree.nodes["Background"]
-    background.inputs["Strength"].default_value = strength
-    tree.links.new(texture.outputs["Color"], background.inputs["Color"])
-    scene.world = world
+    environment_world(scene, str(world_path), strength, projection=world_projection,
+                      name="Photo world")
     bpy.ops.mesh.primitive_uv_sphere_add(segments=96, ring_count=48, radius=1.0)
     ball = bpy.context.object
     bpy.ops.object.shade_smooth()
@@ -67,21 +62,9 @@ def grey_ball_scene(world_path, projection="ORTHO", strength=1.0, samples=SAMPLE
     camera.location = (0.0, -(DISTANCE_85 if projection == "PERSP" else 5.0), 0.0)
     camera.rotation_euler = (np.pi / 2, 0.0, 0.0)
     scene.camera = camera
-    render = scene.render
-    render.engine = "CYCLES"
-    render.resolution_x = render.resolution_y = SIZE
-    render.resolution_percentage = 100
-    render.dither_intensity = 0.0
-    render.film_transparent = False
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    scene.view_settings.exposure = 0.0
-    scene.view_settings.gamma = 1.0
-    scene.cycles.samples = samples
-    scene.cycles.use_adaptive_sampling = False
-    scene.cycles.use_denoising = False
-    scene.cycles.filter_width = 0.01
-    scene.cycles.device = "CPU"
+    setup_render(scene, SIZE, samples=samples)
+    scene.render.film_transparent = False  # the photo shows the world around the ball
+    scene.view_layers[0].use_pass_normal = False
     return scene, material
 
 
@@ -126,21 +109,3 @@ def render_png(scene, path, depth="8"):
 def linear(path):
     """The image at ``path`` as Blender renders it, float64 (H, W, 3), rows top to bottom."""
     return load_image_pixels(path)[..., :3].astype(np.float64)
-
-
-def write_float_exr(path, pixels):
-    """Top-to-bottom float ``pixels`` (H, W, 3) as a lossless 32-bit EXR (``save_render`` with
-    a temporary scene's settings, which keeps the values; ``Image.save`` would not)."""
-    height, width = pixels.shape[:2]
-    rgba = np.ones((height, width, 4), dtype=np.float32)
-    rgba[..., :3] = pixels[..., :3]
-    image = bpy.data.images.new("photo_scene_exr", width, height, float_buffer=True, alpha=True)
-    image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())
-    scene = bpy.data.scenes.new("photo_scene_exr")
-    settings = scene.render.image_settings
-    settings.file_format, settings.color_mode, settings.color_depth = "OPEN_EXR", "RGBA", "32"
-    settings.exr_codec = "ZIP"
-    image.save_render(str(path), scene=scene)
-    bpy.data.scenes.remove(scene)
-    bpy.data.images.remove(image)
-    return str(path)
