@@ -1,21 +1,12 @@
 """SH + extracted lights against path tracing, for a sphere on a ground plane with shadows.
 
-    .venv/bin/python -m benchmarks.bench_lights [--hdri sunrise] [--size 48] [--no-eevee]
-
-writes its fragment of benchmarks/REPORT.md (``fragments``: "lights"). Scene:
-benchmarks/shadow_scene.py (white diffuse sphere
-on a white diffuse plane, the bundled HDRI as the world). Reference: Cycles path tracing of
-the original world at ``REFERENCE_SAMPLES``. Compared, each at a few sample counts (time =
-the render's wall clock, errors = mean |image − reference| / mean reference over the pixels
-the objects cover):
-
-* Cycles path tracing of the original world;
-* SH + k extracted lights (k = 0: plain SH), Apply mode KEEP_BSDF (so the lights' shadows
-  fall; interreflections are still path traced), the world kept as the visible background;
-* EEVEE with its own world lighting and World.sun_threshold split (one render), if it runs.
-
-The headline: the equal-error time ratio, the time path tracing needs to reach the error of
-SH + lights (its errors fitted by a power law of time) over the time SH + lights take.
+``python -m benchmarks.bench_lights [--hdri sunrise] [--size 48] [--no-eevee]`` writes its
+fragment of benchmarks/REPORT.md ("lights"). Scene: ``shadow_scene`` (white diffuse sphere on a
+white plane, a bundled HDRI as the world); reference: Cycles path tracing at
+``REFERENCE_SAMPLES``; compared at a few sample counts: path tracing, SH + k lights (k = 0:
+plain SH; Keep BSDF, so the lights cast shadows), EEVEE's own. Error: mean |image − reference|
+/ mean reference over the objects' pixels; headline: the time path tracing needs for the same
+error over the SH render's (its error fitted by a power law).
 """
 
 import argparse

@@ -1,25 +1,12 @@
 """Light from a photograph: Match Photo's error against noise, hidden ball and the prior.
 
-    .venv/bin/python -m benchmarks.bench_photo
-
-writes its fragment of benchmarks/REPORT.md (``fragments``: "photo") and
-benchmarks/photo_error.png (matplotlib, installed by ``make bench``).
-Scenes: benchmarks/photo_scene.py (a grey ball, albedo 0.18, Diffuse BSDF, Cycles 96 px,
-32 spp). Measured:
-
-* a world that is exactly nine terms, rendered orthographic to EXR, with Gaussian noise of σ
-  (a fraction of each pixel) added, ``DRAWS`` noise draws each: the fit's error on the seen
-  normals and over all normals against the world's nine terms, with the whole ball seen and
-  with a quarter hidden, priors mirror and chrome (a mirror-ball image of the same world);
-* courtyard (bundled with Blender) rendered at 85 mm to an 8-bit sRGB PNG: per prior, the
-  error on the seen normals (up to one scale) against the nine-term limit there (the best
-  nine-term fit to the world's true irradiance on those normals) and over all normals;
-* both balls: courtyard made into a chrome ball's mirror-ball image (256 px) as the world
-  (Mirror Ball projection), the grey ball photographed in it one stop under from −Y and from
-  +Y: every prior (chrome: the world; photo: the +Y photo) and the exposure match;
-* the suggested circle (``core.ball_detect``) on each render against the scene's circle.
-
-Errors: RMS of E over normals and channels, divided by its mean (``core.photo.relative_rms``).
+``python -m benchmarks.bench_photo`` writes its fragment of benchmarks/REPORT.md ("photo") and
+photo_error.png. Scenes: ``photo_scene`` (a grey ball, albedo 0.18, Cycles 96 px, 32 spp).
+Measured: an exact nine-term world with added noise σ (whole ball and a quarter hidden, priors
+mirror and chrome); courtyard at 85 mm, 8-bit, per prior against the nine-term limit on the
+seen normals; both balls (a chrome ball's image as the world, a second photo from +Y) with the
+exposure match; the suggested circle against the scene's. Errors: RMS of E over normals and
+channels / its mean (``core.photo.relative_rms``).
 """
 
 import os

@@ -1,24 +1,12 @@
 """`python -m benchmarks.bench_real_scene`: every Apply mode in a real scene.
 
-A scene of our own: a 40 m ground plane, a box and a Suzanne (diffuse, base 0.8, roughness
-0.5), a glossy sphere (metallic 0.8, roughness 0.5), a camera looking down at them, under two
-bundled HDRIs (Blender's studiolights/world): sunrise.exr (a low sun: long shadows) and
-forest.exr (soft, overcast-like light). Each method in ``METHODS`` renders the scene; each
-render is compared with Cycles path tracing of the original world (``REFERENCE_SAMPLES``):
-
-* error: relative RMSE (RMS of the pixel difference over the mean of the reference) over the
-  diffuse objects' pixels, the glossy sphere's, and the shadowed ground's (ground pixels
-  below half the ground's median brightness in the reference: the occluders' shadows);
-* brightness: mean over the diffuse objects ÷ the reference's;
-* time: the render's wall time (the machine is shared: see the load average).
-
-Writes its fragment of benchmarks/REPORT.md (``fragments``: "real_scene"); ``--only`` replaces
-the rows of the methods run and keeps the others. ``METHODS`` is a list: another mode is one more entry. ``TRANSFER_METHODS`` bake
-the transfer of all four objects once per HDRI (Cycles, ``TRANSFER_SAMPLES``; the ground is a
-grid, fine near the objects, so that the per-corner transfer can hold their shadows) and
-render it, with and without Extract Lights; the EEVEE frame time of Blender's own world
-lighting and of the transfer with lights is also measured warm (second render of each, the
-shaders compiled), since a first EEVEE render here is mostly the shader compile.
+A 40 m ground, a box and a Suzanne (diffuse, base 0.8, roughness 0.5) and a glossy sphere
+(metallic 0.8, roughness 0.5) under sunrise.exr and forest.exr; each method of ``METHODS``
+(and ``TRANSFER_METHODS``, with and without Extract Lights) renders it, compared with Cycles
+path tracing of the world (``REFERENCE_SAMPLES``): relative RMSE over the diffuse objects, the
+glossy sphere and the shadowed ground (below half the ground's median in the reference),
+brightness, time; EEVEE frame times also warm. Writes its fragment of benchmarks/REPORT.md
+("real_scene"); ``--only`` replaces the rows of the methods run and keeps the others.
 """
 
 import argparse

@@ -1,25 +1,12 @@
 """`python -m benchmarks.bench_sizes [--max-width 16384]`: every stage of an HDRI's way
 through the add-on at 1K-16K, in time and memory, against the floor for that stage.
 
-Maps (a smooth sky with 10 % noise, a small very bright sun and a sharp-edged window) are
-written to a temporary folder as 32-bit float ZIP OpenEXR and as 8-bit sRGB PNG. Each
-(size, format, stage) runs in a fresh subprocess, so that its peak RSS
-(``resource.getrusage(RUSAGE_SELF).ru_maxrss``) is its own; inside it the stage's Python/numpy
-allocations are traced (``tracemalloc`` peak). Stages and their floors:
-
-* decode: Blender loading the file (``Image.size`` read) — the floor of everything else;
-* readback: ``images.linear_pixels`` (``foreach_get``; 8-bit: the sRGB decoding) — floor: decode;
-* projection (``project_equirect``), error estimate (``irradiance.error_estimate``, 256
-  normals), Extract Lights (``core.lights.extract_lights``, 2 lights, as ``compute --lights 2``
-  calls it after the estimate), specular cube
-  (``gltf.specular_cube``), file writing (the .gltf text with its cube, written) — floor: one
-  numpy pass (``pixels.sum()``) over the same float32 RGBA pixels, timed in alternation;
-* memory floor: the decoded image's size in memory (H × W × 4 float32).
-
-Times are the minimum of ``REPEATS`` runs in the subprocess (the decode: of loads of the
-file). The machine is shared: the load average is printed beside the table. Writes its
-fragment of benchmarks/REPORT.md (``fragments``: "sizes") and
-benchmarks/sizes.png (time and memory against pixels, log-log, with the fitted slope).
+Maps (smooth sky, a small very bright sun, a sharp window) as float EXR and 8-bit PNG; each
+(size, format, stage) in a fresh subprocess (its own peak RSS; tracemalloc inside). Stages:
+decode (Blender's load: the floor), readback (floor: decode), projection, error estimate,
+Extract Lights (2), specular cube, .gltf writing (floor: one ``pixels.sum()``, in
+alternation); memory floor: the decoded image (H × W × 4 float32). Times: the minimum of
+``REPEATS`` runs. Writes its fragment of benchmarks/REPORT.md ("sizes") and sizes.png.
 """
 
 import argparse

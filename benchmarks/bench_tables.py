@@ -1,15 +1,10 @@
 """The measurement tables two tests assert bounds on, printed in full (`make bench`).
 
-`python -m benchmarks.bench_tables`:
-
-* the 9-term irradiance error against brute force of the 8 HDRIs inside bpy, mean and max as
-  fractions of the total light (``tests/blender/world/test_hdri_error.py`` asserts the universal
-  bounds of docs/reference.md §2; docs/accuracy.md quotes this table);
-* the float32 rounding of each evaluation order of eq. 13 (``tests/core/test_stability.py``
-  asserts that the node group's order rounds least on physical lighting).
-
-The tests keep their assertions and print nothing; the functions that measure are theirs, so
-the table and the assertion cannot drift apart.
+``python -m benchmarks.bench_tables``: the 9-term irradiance error against brute force of the
+8 HDRIs inside bpy (tests/blender/world/test_hdri_error.py asserts docs/reference.md §2's
+bounds) and the float32 rounding of each evaluation order of eq. 13
+(tests/core/test_stability.py). The measuring functions are the tests', so the table and the
+assertion cannot drift apart.
 """
 
 import sys

@@ -1,19 +1,11 @@
 """Renders for `python -m benchmarks.report`: a white diffuse sphere under an HDRI.
 
-The same scene (unit UV sphere, smooth shaded, albedo 1, orthographic camera) is rendered
-
-* by Cycles path tracing with a Diffuse BSDF under the HDRI world, at several sample counts;
-* by the add-on's "SH Irradiance" node group (Emission of albedo·E/π, eq. 13) in Cycles, 1
-  sample, with the world removed (the SH render does not need the HDRI);
-* by EEVEE, when asked: the SH node group and EEVEE's own world lighting of a Diffuse BSDF.
-
-Every render writes a float RGBA OpenEXR (no denoising, no dithering, 'Standard' view,
-pixel filter 0.01 px so each pixel sees its centre only), read back with
-``load_image_pixels``. The world texture uses 'Closest' interpolation, so the path tracer
-sees exactly the piecewise-constant image that ``reference_irradiance`` integrates. The
-shading normal of each pixel comes from one extra render of an Emission material showing
-(n + 1)/2; the ground truth of each pixel is then ``reference_irradiance(hdri, n) / π``
-(exact for a convex sphere: no occlusion, no interreflection).
+The same sphere (albedo 1, orthographic camera) by Cycles path tracing of the HDRI world at
+several sample counts, by the "SH Irradiance" group (Emission of albedo · E / π, eq. 13) at
+1 sample without the world, and optionally by EEVEE (the group, and its own world lighting).
+Exact-pixel float EXRs; the world texture is 'Closest', so the truth of each pixel is
+``reference_irradiance(hdri, n) / π`` at its shading normal n (from an extra render of
+(n + 1)/2): exact for a convex sphere.
 """
 
 import time

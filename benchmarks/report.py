@@ -1,22 +1,11 @@
 """`python -m benchmarks.report [--quick]`: error against run time, measured on this machine.
 
-Writes its fragment of benchmarks/REPORT.md (``fragments``: "methods") and benchmarks/*.png
-from measurements taken in this run only:
-
-1. Prefiltering: ``project_equirect`` time against resolution (1K … 16K float32 RGBA) as a
-   ratio to one numpy pass (``pixels.sum()``) over the same pixels, paired and alternating;
-   and the coefficient error of prefiltering downsampled copies (mip levels) against the
-   time each level saves (8 bundled HDRIs; one synthetic 8K map for the time axis).
-2. Approximation: irradiance error of SH orders 1, 2, 2 windowed, 3, 4 and of brute-force
-   irradiance maps (bilinear lookup) against ``reference_irradiance`` at fixed normals, with
-   the time of each (8 bundled HDRIs and synthetic extremes).
-3. Rendering: a white diffuse sphere under a bundled HDRI, Cycles path tracing at several
-   sample counts against the SH node group (and EEVEE), image error against render time.
-4. Which method to pick for which goal, citing the numbers above.
-
-``--quick`` (development only, ~2 minutes): smaller sizes and fewer repeats; its numbers are
-not the benchmark. ``--no-eevee`` / ``--eevee`` override the default (EEVEE on in full runs,
-off in quick ones).
+Writes its fragment of benchmarks/REPORT.md ("methods") and benchmarks/*.png, from this run's
+measurements only: 1. prefiltering time against resolution (a ratio to one ``pixels.sum()``,
+in alternation) and the error of prefiltering mip levels; 2. the irradiance error of SH
+orders 1-4, windows and brute-force irradiance maps against ``reference_irradiance``, with
+their times; 3. Cycles path tracing against the SH node group (and EEVEE) on a sphere;
+4. which method for which goal. ``--quick``: a development run, not the benchmark.
 """
 
 import argparse

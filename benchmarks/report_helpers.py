@@ -1,16 +1,9 @@
-"""Pure numpy helpers of `python -m benchmarks.report` (no bpy; tested in tests/core).
+"""Pure numpy helpers of `python -m benchmarks.report` (no bpy; tested in tests/benchmarks).
 
-* ``fibonacci_normals``: a fixed, nearly uniform set of unit normals (the error sample);
-* ``downsample2``: one mip level, 2×2 box averages in texel space (or solid-angle weighted);
-* ``irradiance_map_shape`` / ``build_irradiance_map`` / ``lookup_bilinear``: the standard
-  method the paper compares against, a brute-force irradiance environment map (equirect,
-  values at texel centres by eq. 1) read back with bilinear interpolation, longitude wrapped;
-* ``error_stats``: errors as a fraction of the total power P = ∫L dω and relative to the
-  local reference value;
-* ``synthetic_map``: the synthetic extremes (sun on a dim sky, half-sphere step, constant,
-  a few point-like sources), float32 RGBA, built in row blocks so an 8K map needs no more
-  memory than itself;
-* ``samples_to_reach``: the first sample count whose measured error is at or below a target.
+``fibonacci_normals`` (the error sample), ``downsample2`` (a mip level), the brute-force
+irradiance map of the standard method (``build_irradiance_map``, eq. 1 at texel centres, read
+by ``lookup_bilinear``), ``error_stats`` (errors / P = ∫L dω and relative to the local value),
+``synthetic_map`` (the synthetic extremes, built in row blocks) and ``samples_to_reach``.
 """
 
 from math import pi, sqrt
