@@ -2,9 +2,9 @@
 group applied to its materials, saved to a new file or in place."""
 
 from .options import add_blend_output, add_mode, add_scene
-from .paths import blend_relative, changed_alone, check_new_file, input_file, refuse_inputs
+from .paths import blend_relative, changed_alone, input_file
 from .report import CommandError, say
-from .session import open_blend, open_file, pick_scene, save_blend
+from .session import open_blend, open_file, output_blend, pick_scene, save_and_say
 
 HELP = "set a preset in a .blend and apply the SH node group to its materials"
 
@@ -37,12 +37,7 @@ def run(args):
     else:
         blend = open_file()
     preset, _ = read_preset_argument(args.preset, blend)  # refused before Blender opens
-    out = blend if args.in_place else blend_relative(args.out, blend, "--out")
-    if not args.in_place:
-        refuse_inputs(out, "--out", {".blend file": blend},
-                      advice="use --in-place to replace it")
-        refuse_inputs(out, "--out", {"preset": preset})
-        check_new_file(out, args.overwrite, what="--out")
+    out = output_blend(args, blend, {"preset": preset})
     if args.in_place:
         with changed_alone(blend, ".blend file"):
             return apply_and_save(args, preset, out)
@@ -80,11 +75,7 @@ def apply_and_save(args, preset, out):
     if args.mode == "KEEP_BSDF":
         for line in api.shared_scene_notes(scene, result.changed):
             say(f"warning: {line}")
-    try:
-        save_blend(out, overwrite=args.in_place or args.overwrite)
-    except (OSError, RuntimeError) as error:
-        raise CommandError(f"could not save '{out}': {error}") from None
-    say(f"Saved {out}")
+    save_and_say(args, out)
     return 0
 
 

@@ -9,8 +9,14 @@ from pathlib import Path
 
 from ..formats.atomic import atomic_destination
 from . import interrupts
-from .paths import input_file, remove_own_leftovers
-from .report import CommandError
+from .paths import (
+    blend_relative,
+    check_new_file,
+    input_file,
+    refuse_inputs,
+    remove_own_leftovers,
+)
+from .report import CommandError, say
 
 
 def open_file():
@@ -103,3 +109,27 @@ def save_blend(path, overwrite):
         bpy.ops.wm.save_as_mainfile(filepath=str(temporary), copy=True)
         interrupts.check()  # a Ctrl+C taken while Blender saved: the input stays as it was
     return Path(path)
+
+
+def output_blend(args, blend, inputs=None):
+    """Where a command that changes ``blend`` saves it: the input itself (--in-place) or --out
+    (relative to the .blend; never the .blend or one of ``inputs``, {what: path}; refused if it
+    exists without --overwrite)."""
+    if args.in_place:
+        return blend
+    out = blend_relative(args.out, blend, "--out")
+    refuse_inputs(out, "--out", {".blend file": blend}, advice="use --in-place to replace it")
+    if inputs:
+        refuse_inputs(out, "--out", inputs)
+    check_new_file(out, args.overwrite, what="--out")
+    return out
+
+
+def save_and_say(args, out):
+    """``save_blend`` to ``out`` (a CommandError naming it when that fails), then "Saved OUT"."""
+    try:
+        save_blend(out, overwrite=args.in_place or args.overwrite)
+    except (OSError, RuntimeError) as error:
+        raise CommandError(f"could not save '{out}': {error}") from None
+    say(f"Saved {out}")
+

@@ -4,9 +4,8 @@ file or in place."""
 
 from .apply import objects_to_apply
 from .options import add_blend_output, add_mode, add_scene, positive
-from .paths import blend_relative, check_new_file, refuse_inputs
 from .report import CommandError, say
-from .session import open_blend, open_file, pick_scene, save_blend
+from .session import open_blend, open_file, output_blend, pick_scene, save_and_say
 
 HELP = "bake the SH transfer (shadows, bounce light) of a .blend's meshes with Cycles"
 DEFAULT_SAMPLES = 64  # blender.transfer.bake.DEFAULT_SAMPLES (no bpy import for --help)
@@ -44,10 +43,7 @@ def run(args):
     blend = open_blend(args.blend, load_ui=True) if args.blend is not None else blend
     if blend is None:
         raise CommandError("no .blend given and none is open: pass the .blend file")
-    out = blend if args.in_place else blend_relative(args.out, blend, "--out")
-    if not args.in_place:
-        refuse_inputs(out, "--out", {".blend file": blend}, advice="use --in-place to replace it")
-        check_new_file(out, args.overwrite, what="--out")
+    out = output_blend(args, blend)
     scene = pick_scene(args.scene)
     if args.objects:
         objects = objects_to_apply(scene, args.objects)
@@ -73,9 +69,5 @@ def run(args):
         for name, reason in skipped:
             say(f"skipped '{name}': {reason}")
         say(f"Transfer applied to {len(changed)} material(s): {', '.join(changed)}")
-    try:
-        save_blend(out, overwrite=args.in_place or args.overwrite)
-    except (OSError, RuntimeError) as error:
-        raise CommandError(f"could not save '{out}': {error}") from None
-    say(f"Saved {out}")
+    save_and_say(args, out)
     return 0

@@ -277,17 +277,24 @@ def _build_nodes(tree):
         b.link(scaled.outputs[0], term.inputs[1])
         total = term.outputs[0]
 
-    albedo_e = b.vector_math("MULTIPLY", 12, 7, "Albedo · E")
+    diffuse_outputs(b, group_in, total, 12)
+
+
+def diffuse_outputs(b, group_in, total, column):
+    """The group's outputs from its irradiance ``total`` (E): Irradiance E, Diffuse =
+    Albedo · E / π and Shader, an Emission of Diffuse (Strength 1), in the columns from
+    ``column`` on. Returns the Emission node (the transfer group drives its Strength)."""
+    albedo_e = b.vector_math("MULTIPLY", column, 7, "Albedo · E")
     b.link(group_in.outputs["Albedo"], albedo_e.inputs[0])
     b.link(total, albedo_e.inputs[1])
-    diffuse = b.vector_math("SCALE", 13, 7, "/ π")
+    diffuse = b.vector_math("SCALE", column + 1, 7, "/ π")
     b.link(albedo_e.outputs["Vector"], diffuse.inputs[0])
     diffuse.inputs["Scale"].default_value = 1.0 / pi
-    emission = b.node("ShaderNodeEmission", 14, 8)
+    emission = b.node("ShaderNodeEmission", column + 2, 8)
     b.link(diffuse.outputs["Vector"], emission.inputs["Color"])
     emission.inputs["Strength"].default_value = 1.0
-
-    group_out = b.node("NodeGroupOutput", 15, 7)
+    group_out = b.node("NodeGroupOutput", column + 3, 7)
     b.link(total, group_out.inputs["Irradiance"])
     b.link(diffuse.outputs["Vector"], group_out.inputs["Diffuse"])
     b.link(emission.outputs["Emission"], group_out.inputs["Shader"])
+    return emission

@@ -8,12 +8,10 @@ orientation); outputs Irradiance, Diffuse = Albedo · E / π, Shader (an Emissio
 that diffuse rays do not see: the bounce is in T_lm already). Unbaked objects read 0.
 """
 
-from math import pi
-
 import bpy
 
 from ...core.sh import COEFFICIENT_NAMES
-from ..shading.nodes import Builder, ensure_interface, lighting_readers
+from ..shading.nodes import Builder, diffuse_outputs, ensure_interface, lighting_readers
 from .bake import ATTRIBUTE_NAMES
 
 GROUP_NAME = "SH Transfer"
@@ -73,14 +71,7 @@ def _build_nodes(tree):
         b.link(scaled.outputs["Vector"], term.inputs[1])
         total = term.outputs[0]
 
-    albedo_e = b.vector_math("MULTIPLY", 6, 7, "Albedo · E")
-    b.link(group_in.outputs["Albedo"], albedo_e.inputs[0])
-    b.link(total, albedo_e.inputs[1])
-    diffuse = b.vector_math("SCALE", 7, 7, "/ π")
-    b.link(albedo_e.outputs["Vector"], diffuse.inputs[0])
-    diffuse.inputs["Scale"].default_value = 1.0 / pi
-    emission = b.node("ShaderNodeEmission", 8, 8)
-    b.link(diffuse.outputs["Vector"], emission.inputs["Color"])
+    emission = diffuse_outputs(b, group_in, total, 6)
     # Strength 1 − Is Diffuse Ray: T_lm already holds the interreflection, so diffuse rays
     # arriving from other surfaces must not see this light again (in "KEEP_BSDF" the BSDF
     # would count it twice); camera, glossy and transmission rays see it.
@@ -89,7 +80,3 @@ def _build_nodes(tree):
     strength.inputs[0].default_value = 1.0
     b.link(light_path.outputs["Is Diffuse Ray"], strength.inputs[1])
     b.link(strength.outputs[0], emission.inputs["Strength"])
-    group_out = b.node("NodeGroupOutput", 9, 7)
-    b.link(total, group_out.inputs["Irradiance"])
-    b.link(diffuse.outputs["Vector"], group_out.inputs["Diffuse"])
-    b.link(emission.outputs["Emission"], group_out.inputs["Shader"])
