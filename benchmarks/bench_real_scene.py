@@ -28,6 +28,8 @@ from sh_lighting.blender.transfer import apply as transfer_apply
 from sh_lighting.blender.transfer import bake
 from sh_lighting.blender.world.images import load_image_pixels
 
+from tests.blender_scenes import environment_world
+
 from . import fragments
 from .render_bench import _settings
 
@@ -83,12 +85,7 @@ def build_scene(hdri_path, size):
     """The scene (module docstring) in a fresh Blender; returns {role: [objects]}."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
-    world = bpy.data.worlds.new("HDRI")
-    tree = compat.ensure_node_tree(world)
-    environment = tree.nodes.new("ShaderNodeTexEnvironment")
-    environment.image = bpy.data.images.load(str(hdri_path))
-    tree.links.new(environment.outputs["Color"], tree.nodes["Background"].inputs["Color"])
-    scene.world = world
+    environment_world(scene, str(hdri_path), name="HDRI")
     diffuse = _principled("Diffuse", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=0.5)
     glossy = _principled("Glossy", Base_Color=(0.8, 0.8, 0.8, 1.0), Roughness=0.5,
                          Metallic=0.8)

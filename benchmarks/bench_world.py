@@ -21,6 +21,7 @@ from sh_lighting.blender.world.images import image_pixels
 from sh_lighting.blender.world.reader import world_coefficients
 from sh_lighting.core.equirect import texel_directions
 from sh_lighting.core.projection import project_equirect
+from tests.blender_scenes import environment_world
 
 WIDTH, HEIGHT = 4096, 2048
 REPEATS = 5
@@ -56,12 +57,7 @@ def synthetic_sky(height, width):
 def time_once(path):
     """(decode, readback, projection, world_coefficients) seconds on a freshly loaded image."""
     image = bpy.data.images.load(path, check_existing=False)
-    world = bpy.data.worlds.new("bench")
-    tree = world.node_tree
-    texture = tree.nodes.new("ShaderNodeTexEnvironment")
-    texture.image = image
-    tree.links.new(texture.outputs["Color"], tree.nodes["Background"].inputs["Color"])
-    bpy.context.scene.world = world
+    world = environment_world(bpy.context.scene, image, name="bench")
 
     start = time.perf_counter()
     width, height = image.size  # reading the values (not just .size) decodes the file

@@ -20,6 +20,7 @@ from sh_lighting.blender.data import compat, scene_data
 from sh_lighting.blender.shading import materials
 from sh_lighting.blender.world.images import load_image_pixels
 from sh_lighting.core import project_equirect, reference_irradiance
+from tests.blender_scenes import environment_world
 
 CAMERA_LOCATION = (3.0, -4.0, 2.5)
 ORTHO_SCALE = 2.3
@@ -104,14 +105,8 @@ class SphereScene:
         self.workdir = Path(workdir)
         self.count = 0
         self.hdri = bpy.data.images.load(str(hdri_path), check_existing=False)
-        world = bpy.data.worlds.new("HDRI")
-        tree = compat.ensure_node_tree(world)
-        environment = tree.nodes.new("ShaderNodeTexEnvironment")
-        environment.image = self.hdri
-        environment.interpolation = "Closest"
-        tree.links.new(environment.outputs["Color"], tree.nodes["Background"].inputs["Color"])
-        tree.nodes["Background"].inputs["Strength"].default_value = 1.0
-        self.world = world
+        self.world = environment_world(self.scene, self.hdri, interpolation="Closest",
+                                       name="HDRI")
         self.materials = {kind: _material(kind, kind) for kind in ("diffuse", "normal", "sh")}
         bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=64, ring_count=32)
         self.sphere = bpy.context.object

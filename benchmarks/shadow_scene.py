@@ -15,6 +15,7 @@ import numpy as np
 
 from sh_lighting.blender.data import compat
 from sh_lighting.blender.world.images import load_image_pixels
+from tests.blender_scenes import environment_world
 
 from .render_bench import _settings, add_camera
 
@@ -54,16 +55,8 @@ class ShadowScene:
         self.workdir = Path(workdir)
         self.count = 0
         self.hdri = bpy.data.images.load(str(hdri_path), check_existing=False)
-        world = bpy.data.worlds.new("HDRI")
-        tree = compat.ensure_node_tree(world)
-        environment = tree.nodes.new("ShaderNodeTexEnvironment")
-        environment.image = self.hdri
-        environment.interpolation = "Closest"
-        background = tree.nodes["Background"]
-        tree.links.new(environment.outputs["Color"], background.inputs["Color"])
-        background.inputs["Strength"].default_value = strength
-        self.world = world
-        self.scene.world = world
+        self.world = environment_world(self.scene, self.hdri, strength,
+                                       interpolation="Closest", name="HDRI")
         bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=64, ring_count=32,
                                              location=(0.0, 0.0, 1.0))
         self.sphere = bpy.context.object
