@@ -77,7 +77,8 @@ class LightsInfo:
             elif not size and limit < largest:
                 text += (f" (raise Size Limit above {limit:.0f}° to extract it as a light, or "
                          "leave it in the SH)")
-        return text
+        note = getattr(self.coefficients, "note", "")  # a key written over an animated value
+        return f"{text}; SH lighting {note}" if note else text
 
 
 def _registry(scene):

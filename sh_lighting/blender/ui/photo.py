@@ -148,7 +148,7 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
                                     roll=self.second_roll)
                   if self.prior == "photo" and self.second_filepath else None)
         try:
-            _coeffs, result = fit.coefficients_from_photo(
+            stored, result = fit.coefficients_from_photo(
                 context.scene, self.filepath, tuple(self.circle), direction=direction,
                 roll=self.roll, projection=self.projection, focal_mm=self.focal_mm,
                 sensor_mm=self.sensor_mm, albedo=self.albedo, margin=self.margin,
@@ -162,7 +162,8 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
                 if result.residual > WARN_RESIDUAL else "")
         exposure = scene_data.provenance(context.scene).get("exposure_summary")
         both = f"; {exposure}" if exposure else ""
-        self.report(kind, f"SH lighting from the photo: {result.summary()}{note}{both}")
+        keyed = f"; SH lighting {stored.note}" if getattr(stored, "note", "") else ""
+        self.report(kind, f"SH lighting from the photo: {result.summary()}{note}{both}{keyed}")
         return {"FINISHED"}
 
 

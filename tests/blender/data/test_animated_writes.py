@@ -212,3 +212,27 @@ def test_reset_over_a_keyed_gain_keys_it_and_says_so(addon):
         "sh_L11_gain is animated"))])
     for frame in (3, 8):  # one key: the Reset value renders at every frame
         assert_allclose(rendered(scene, frame), BASE)
+
+
+def test_extract_lights_reports_the_key_it_wrote(addon, tmp_path):
+    """Extract Lights stores the world without its lights over a keyed gain: its report says
+    what the write did, as every other writer's does."""
+    from blender_files import write_exr
+    from blender_scenes import environment_world, run_execute, sunny_map
+
+    from sh_lighting.blender.design import lights
+    from sh_lighting.blender.ui import lights as lights_ui
+
+    scene = bpy.context.scene
+    environment_world(scene, write_exr(tmp_path / "sun.exr", sunny_map()[0]), 1.0)
+    api.set_coefficients(scene, BASE)
+    key(scene, "sh_L00_gain", 1, 0.5)
+    scene.frame_set(1)
+    result, reports = run_execute(lights_ui.SHLIGHT_OT_extract_lights, count=1,
+                                  use_error_target=False, error_target=0.5,
+                                  size_limit=lights.SIZE_LIMIT)
+    assert result == {"FINISHED"}
+    [(kinds, message)] = reports
+    assert kinds == {"INFO"} and message.startswith("Extract Lights from 'sun.exr'")
+    assert message.endswith("; SH lighting keyed at frame 1 because sh_L00_gain is animated")
+    assert len(lights.extracted_lights(scene)) == 1
