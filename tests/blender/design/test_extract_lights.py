@@ -21,8 +21,8 @@ from sh_lighting.core.sh import spread_normals
 from sh_lighting.core.world_map import map_irradiance
 from blender_files import write_exr
 from blender_scenes import (
-    EULER, SUN_IMAGE_DIRECTION, SUN_RADIANCE, SUN_RGB, environment_world, run_execute, sky_map,
-    sunny_map,
+    EULER, SUN_IMAGE_DIRECTION, SUN_RADIANCE, SUN_RGB, black_world, environment_world,
+    run_execute, sky_map, sunny_map,
 )
 from numpy.testing import assert_allclose
 from ui_layout import RecordingLayout
@@ -257,11 +257,7 @@ def test_cycles_renders_the_extracted_sun_where_it_was(addon, tmp_path):
     [sun] = lights.extracted_lights(scene)
     toward = -minus_z(sun)
 
-    black = bpy.data.worlds.new("Black")
-    background = compat.ensure_node_tree(black).nodes["Background"]
-    background.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    background.inputs["Strength"].default_value = 0.0
-    scene.world = black
+    black_world(scene)
     material = white_diffuse()
     normals = np.array([tilted_plane(i, material) for i in range(3)])
     camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
