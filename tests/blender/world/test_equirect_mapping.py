@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import bpy
+from blender_scenes import environment_world
 from mathutils import Vector
 
 from sh_lighting.blender.world.images import load_image_pixels
@@ -35,20 +36,7 @@ def build_coded_world(height, width):
     image.pack()
 
     scene = bpy.context.scene
-    world = bpy.data.worlds.new("coded")
-    scene.world = world
-    if world.node_tree is None:
-        world.use_nodes = True
-    nodes, links = world.node_tree.nodes, world.node_tree.links
-    nodes.clear()
-    texture = nodes.new("ShaderNodeTexEnvironment")
-    texture.image = image
-    texture.interpolation = "Closest"
-    texture.projection = "EQUIRECTANGULAR"
-    background = nodes.new("ShaderNodeBackground")
-    output = nodes.new("ShaderNodeOutputWorld")
-    links.new(texture.outputs["Color"], background.inputs["Color"])
-    links.new(background.outputs["Background"], output.inputs["Surface"])
+    environment_world(scene, image, interpolation="Closest", name="coded")
     return scene
 
 
