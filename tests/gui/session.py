@@ -747,7 +747,7 @@ def file_browser():
 def files_and_presets():
     """Save (the dialog's name field takes typing at once), remove (the confirmation names the
     preset), Import (opens in the .blend's folder), Export (one entry per format, one operator)."""
-    preset_io = addon_module("presets.files")
+    preset_io = addon_module("presets.preset_io")
     folder = os.path.join(SHOTS, "..", "blend")
     os.makedirs(folder, exist_ok=True)
     blend = os.path.abspath(os.path.join(folder, "shot.blend"))
