@@ -6,7 +6,8 @@
 its permission bits and owner, a symbolic link is written through, and nothing is replaced
 without ``overwrite=True``. ``atomic_destination`` does the same for other writers;
 ``leftovers`` / ``remove_leftovers`` find and delete the temporaries of killed writers (pid
-gone). Details: docs/modules.md.
+provably gone: no such pid, a zombie or exiting one, or
+one started after the file was written). Details: docs/modules.md.
 """
 
 import errno
@@ -75,9 +76,40 @@ def _writer_gone(pid, entry, now):
         os.kill(pid, 0)
     except ProcessLookupError:
         return True
-    except (OSError, OverflowError):  # PermissionError: another user's process runs
+    except OverflowError:
         return False
-    return False
+    except OSError:  # PermissionError: another user's process runs (or ran: /proc tells)
+        pass
+    return _not_the_writer(pid, entry)
+
+
+_PF_EXITING = 0x4  # the kernel's flag of a process in exit (a SIGKILL delivered)
+_BOOT = re.compile(rb"^btime (\d+)$", re.M)
+
+
+def _not_the_writer(pid, entry):
+    """Whether the live pid ``pid`` provably no longer writes ``entry``, from Linux's
+    ``/proc/<pid>/stat`` (state, flags, start time): a zombie or dead process, one that is
+    exiting, or one started after ``entry`` was last written (the pid reused). False where
+    nothing tells (another system, a file that vanished)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_bytes().rsplit(b")", 1)[1].split()
+        state, flags, started = fields[0], int(fields[6]), int(fields[19])
+    except (OSError, IndexError, ValueError):
+        return False
+    if state in (b"Z", b"X", b"x") or flags & _PF_EXITING:
+        return True
+    try:
+        boot = _BOOT.search(Path("/proc/stat").read_bytes())
+        written = entry.stat(follow_symlinks=False).st_mtime
+    except OSError:
+        return False
+    if boot is None:
+        return False
+    # btime is whole seconds, rounded down: the start computed is at most 1 s early; a
+    # second's margin more for a clock stepped meanwhile.
+    start = int(boot[1]) + started / os.sysconf("SC_CLK_TCK")
+    return start > written + 1.0
 
 
 def leftovers(folder, name=None, now=None):

@@ -5,11 +5,15 @@ while ``sh_lighting.register()`` runs are recorded (the real function still call
 ``execute`` is called with the arguments after it; its return value is the exit status (an
 unknown ID: a message and status 1). Understands ``[-b] -c ID ARGS...`` only.
 
+With BLENDER_STAND_IN_STALL_AFTER_FRAME=N it sleeps right after writing a frame after N,
+before the move: where a kill leaves a hidden temporary frame, every time.
+
 Usage: PYTHONPATH=<repository> python blender_stand_in.py [-b] (-c|--command) ID ARGS...
 """
 
 import os
 import sys
+import time
 
 
 def main(argv):
@@ -22,6 +26,15 @@ def main(argv):
     command, rest = args[1], args[2:]
 
     import bpy
+
+    stall_after = os.environ.get("BLENDER_STAND_IN_STALL_AFTER_FRAME")
+    if stall_after:  # a test's: a Blender that hangs once a frame's file is written
+        @bpy.app.handlers.persistent  # kept when the command opens its .blend
+        def stall(scene, *_):
+            if scene.frame_current > int(stall_after):
+                time.sleep(600)
+
+        bpy.app.handlers.render_write.append(stall)
 
     registered = {}
     real_register = bpy.utils.register_cli_command

@@ -211,32 +211,77 @@ def test_render_output_name_cannot_leave_the_output_folder(tmp_path, blender_com
     job.check_nothing_outside(before)
 
 
+# A worker that keeps the processes it orphans unreaped until told: it makes itself their
+# "child subreaper" (prctl PR_SET_CHILD_SUBREAPER), starts the command, prints its pid, and
+# reaps nothing until its stdin closes. What a loaded machine does for a second or more (the
+# killed Blender a zombie, its pid still answering kill(pid, 0)), made to last the whole rerun.
+HOLDER = """
+import ctypes, os, subprocess, sys
+ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)  # PR_SET_CHILD_SUBREAPER
+child = subprocess.Popen(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+print(child.pid, flush=True)
+sys.stdin.read()
+while True:
+    try:
+        os.wait()
+    except ChildProcessError:
+        break
+"""
+
+BUSY = "import time\nend = time.monotonic() + 600\nwhile time.monotonic() < end: pass\n"
+
+
+def zombies_below(pid):
+    """The pids of zombie processes whose parent is ``pid``."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if fields[0] == "Z" and int(fields[1]) == pid:
+            found.append(int(stat.parent.name))
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux's /proc")
 def test_render_rerun_after_a_killed_task_completes_the_job(tmp_path, blender_command):
-    # The kill comes once the second frame is written: the first task is 20 frames long so
-    # that a poll delayed by a loaded machine still lands in it (with 10, a run at load 4
-    # saw all 10 written before the kill).
+    # The kill comes while frame 4 is a hidden temporary file (the stand-in Blender stops
+    # there). The machine is loaded on purpose (a busy process per core), and the killed
+    # processes stay unreaped zombies until the rerun has ended, as a loaded machine can leave
+    # them for seconds (their pids still answer kill(pid, 0)).
     job, blend, preset = render_job(tmp_path, blender_command)
     params = job.params(BlendFile=str(blend), PresetFile=str(preset),
                         OutputFolder=str(job.out), Frames="1-40", FramesPerTask=20,
                         ApplyMode="EMISSION")
-    process = subprocess.Popen(job.command(params), env=job.env(),
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 300
+    busy = [subprocess.Popen([sys.executable, "-c", BUSY]) for _ in range(os.cpu_count() or 2)]
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, *job.command(params)],
+                              env={**job.env(), "BLENDER_STAND_IN_STALL_AFTER_FRAME": "3"},
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     try:
-        while not (job.out / "shot_0002.exr").exists():
-            assert process.poll() is None and time.monotonic() < deadline
-            time.sleep(0.005)
-    finally:
-        kill_tree(process.pid)  # openjd and the task's Blender (its own process group): a dead
-        process.wait()  # worker
-    done = sorted(p.name for p in job.out.iterdir() if not p.name.startswith("."))
-    assert frame_names(1, 2) == done[:2] and len(done) < 20, done  # killed in the first task
-    for name in done:
-        check_frame(job.out / name)  # what is there is whole
-    stamps = {name: (job.out / name).stat().st_mtime_ns for name in done}
+        worker = int(holder.stdout.readline())
+        deadline = time.monotonic() + 300
+        try:  # frame 4 written to its temporary file, not yet moved into place
+            while not list(job.out.glob(".shot_0004.exr.*-*.exr")):
+                assert holder.poll() is None and time.monotonic() < deadline
+                time.sleep(0.005)
+        finally:
+            kill_tree(worker)  # openjd and the task's Blender (its own process group): a dead
+        done = sorted(p.name for p in job.out.iterdir() if not p.name.startswith("."))
+        assert done == frame_names(1, 3), done  # killed in the first task, writing frame 4
+        for name in done:
+            check_frame(job.out / name)  # what is there is whole
+        stamps = {name: (job.out / name).stat().st_mtime_ns for name in done}
+        assert zombies_below(holder.pid)  # the killed processes, not reaped
 
-    status, blocks = job.run(params)
-    assert status == 0, blocks
+        status, blocks = job.run(params)
+        assert status == 0, blocks
+        assert zombies_below(holder.pid)  # still not reaped while the rerun ran
+    finally:
+        holder.communicate("", timeout=60)  # reaps them
+        for process in busy:
+            process.kill()
+            process.wait()
     run = tasks(blocks)
     assert list(run) == ["1-20", "21-40"]
     skipped = [line for line in run["1-20"]["lines"] if ": skipped (" in line]
@@ -247,5 +292,5 @@ def test_render_rerun_after_a_killed_task_completes_the_job(tmp_path, blender_co
         check_frame(job.out / name)
     assert {name: (job.out / name).stat().st_mtime_ns for name in done} == stamps
     # The frame being written when the kill came was a hidden temporary file, never a frame;
-    # its task, run again, removed it.
+    # its task, run again, removed it although its writer's pid still answered.
     assert sorted(job.out.iterdir()) == sorted(job.out / name for name in frame_names(1, 40))

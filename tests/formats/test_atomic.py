@@ -7,6 +7,7 @@ import errno
 import os
 import stat
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -302,6 +303,51 @@ def test_a_temporary_name_is_what_leftovers_looks_for_once_its_writer_is_gone(tm
     killed = temporary.with_name(temporary.name.replace(f".{os.getpid()}-", f".{_dead_pid()}-"))
     temporary.rename(killed)
     assert atomic.leftovers(tmp_path, "frame_0001.exr") == [killed]
+
+
+def _state(pid):
+    return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux's /proc")
+def test_a_killed_writer_not_yet_reaped_is_gone(tmp_path):
+    """A SIGKILLed writer whose parent has not reaped it yet (a zombie: ``kill(pid, 0)``
+    still succeeds, for a second or more on a loaded machine) writes nothing any more."""
+    import subprocess
+    import time
+
+    writer = subprocess.Popen(["sleep", "60"])
+    try:
+        temporary = tmp_path / f".shot_0004.exr.{writer.pid}-0123456789ab.exr"
+        temporary.write_bytes(b"half a frame")
+        assert atomic.leftovers(tmp_path, "shot_0004.exr") == []  # it runs: it may be writing
+        writer.kill()
+        deadline = time.monotonic() + 30
+        while _state(writer.pid) != "Z":  # killed, not reaped (we do not wait() yet)
+            assert time.monotonic() < deadline
+            time.sleep(0.005)
+        assert atomic.leftovers(tmp_path, "shot_0004.exr") == [temporary]
+    finally:
+        writer.kill()
+        writer.wait()
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux's /proc")
+def test_a_pid_reused_by_a_process_started_after_the_file_was_written_is_not_its_writer(
+        tmp_path):
+    import subprocess
+
+    other = subprocess.Popen(["sleep", "60"])
+    try:
+        temporary = tmp_path / f".shot_0004.exr.{other.pid}-0123456789ab.exr"
+        temporary.write_bytes(b"half a frame")
+        assert atomic.leftovers(tmp_path, "shot_0004.exr") == []  # written since it started
+        written = time.time() - 60  # a minute before this process started: not its file
+        os.utime(temporary, (written, written))
+        assert atomic.leftovers(tmp_path, "shot_0004.exr") == [temporary]
+    finally:
+        other.kill()
+        other.wait()
 
 
 # --- reading presets: small regular files only, one PresetError each ----------------------
