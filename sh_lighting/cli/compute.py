@@ -9,7 +9,7 @@ from ..choices import FILAMENT_FRAMES, FORMATS
 from . import interrupts
 from .options import add_nonfinite, add_scene, positive
 from .paths import blend_relative, check_new_file, input_file, refuse_inputs, remove_own_leftovers
-from .report import CommandError, say, stage_line, timed_stage
+from .report import CommandError, before_long, say, stage_line, timed_stage
 from .session import open_blend, open_file, pick_scene
 
 HELP = "coefficients of an HDRI or of a .blend's world; print them, write a preset"
@@ -87,7 +87,9 @@ def run(args):
         # the specular cube of a glTF export is prefiltered from an equirect map only
         environment = (hdri.pixels, 1.0, None) if hdri.projection == "equirect" else None
         say(how_read(source, hdri, args.projection_given))
+    texels = 0 if hdri is None else hdri.pixels.shape[0] * hdri.pixels.shape[1]
     if args.lights is not None:
+        before_long("extracting lights", texels / PASS_TEXELS_PER_SECOND)
         with timed_stage("Extract Lights"):
             coeffs, count = _lights(source, scene, hdri, args.lights)
         metadata["notes"] = (metadata.get("notes", "") + f" {count} light(s) extracted: these "
@@ -105,6 +107,8 @@ def run(args):
     if out is not None:
         remove_own_leftovers(out)
         interrupts.check()
+        if args.format == "gltf" and environment is not None:
+            before_long("prefiltering the specular cube", texels / PASS_TEXELS_PER_SECOND)
         try:
             with timed_stage("writing (with the specular cube)" if args.format == "gltf"
                              else "writing"):
@@ -131,13 +135,35 @@ def how_read(source, hdri, given):
     return line
 
 
+# Rough rates of this work on one core, for the line before a long step (``before_long``):
+# Blender decodes a ZIP EXR or a .hdr at about 150 MB/s of file, other images at about
+# 30 MB/s; the projection and the estimate take about 0.6 times the decode; Extract Lights
+# and the glTF specular cube each about one pass over the map.
+DECODE_BYTES_PER_SECOND = {".exr": 150e6, ".hdr": 150e6}
+OTHER_BYTES_PER_SECOND = 30e6
+PROJECTION_PER_DECODE = 0.6
+PASS_TEXELS_PER_SECOND = 60e6  # Extract Lights, the specular cube: a pass over the map
+
+
 def read_hdri_file(path, nonfinite, projection="equirect"):
-    """``blender.world.hdri.read_hdri`` of ``path``, its errors as one CommandError line."""
+    """``blender.world.hdri.read_hdri`` of ``path``, its errors as one CommandError line; a
+    line on stderr before each step expected to take long (a big file)."""
     from ..api import read_hdri
     from ..core.equirect import NonFiniteError
 
+    path = Path(path)
+    size = path.stat().st_size
+    rate = DECODE_BYTES_PER_SECOND.get(path.suffix.lower(), OTHER_BYTES_PER_SECOND)
+    before_long(f"decoding {path.name} ({size / 1e6:.0f} MB)", size / rate)
+
+    def progress(stage, seconds):
+        stage_line(stage, seconds)
+        if stage == "decode":
+            before_long("projecting onto the 9 coefficients, then the error estimate",
+                        PROJECTION_PER_DECODE * seconds)
+
     try:
-        return read_hdri(path, nonfinite, progress=stage_line, projection=projection)
+        return read_hdri(path, nonfinite, progress=progress, projection=projection)
     except NonFiniteError as error:
         raise CommandError(
             f"{path}: the image has {error.description}: {NONFINITE_ADVICE}"

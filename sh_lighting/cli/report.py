@@ -1,4 +1,5 @@
-"""What the command line tells the user: progress on stdout, one error line on stderr.
+"""What the command line tells the user: progress on stdout, one error line on stderr, and
+before a step expected to take over ``LONG_SECONDS`` a line on stderr saying what runs.
 
 A command raises ``CommandError`` with one sentence saying what is wrong and what to do;
 ``main`` prints it as ``sh_lighting: error: ...`` and exits with status 1.
@@ -50,6 +51,18 @@ class timed_stage:  # noqa: N801 (used as ``with timed_stage("name"):``)
         if kind is None:
             stage_line(self.name, time.perf_counter() - self.start)
         return False
+
+
+# A step expected to take at least this long says so on stderr before it starts (Blender's
+# decode holds the interpreter: no line can come while it runs, so the line comes first).
+LONG_SECONDS = 2.0
+
+
+def before_long(text, expected):
+    """``sh_lighting: text...`` on stderr when ``expected`` (s, an estimate) is at least
+    ``LONG_SECONDS``: the user waiting sees what runs (stdout stays the command's results)."""
+    if expected >= LONG_SECONDS:
+        print(f"sh_lighting: {text}...", file=sys.stderr, flush=True)
 
 
 def time_left(done, total, elapsed):

@@ -27,3 +27,10 @@ def test_the_time_left_is_the_mean_so_far_times_the_files_left():
     assert report.time_left(1, 100, 30.0) == "; about 50 min left"
     assert report.time_left(10, 10, 50.0) == ""  # nothing left
     assert report.time_left(3, 4, 0.3) == ""  # under a second
+
+
+def test_a_step_expected_to_be_long_says_so_on_stderr_first(capsys):
+    report.before_long("decoding big.exr (383 MB)", 1.9)
+    assert capsys.readouterr() == ("", "")
+    report.before_long("decoding big.exr (383 MB)", 3.8)
+    assert capsys.readouterr() == ("", "sh_lighting: decoding big.exr (383 MB)...\n")

@@ -16,11 +16,10 @@ from datetime import date
 from pathlib import Path
 
 import bpy
-import numpy as np
 
 from ...choices import FILAMENT_FRAMES, FORMATS
 from ...core.coefficients import check_coefficients
-from ...core.colour import REC709, convert_coefficients
+from ...core.colour import REC709, conversion_matrix, convert_coefficients
 from ...formats import atomic
 from ...formats.gltf import gltf_text
 from ...formats.interop import to_filament_sh_txt, to_threejs_json
@@ -190,7 +189,9 @@ def export_text(coeffs, format="sh_lighting", metadata=None, environment=None,
     """The text of ``coeffs`` (9, 3) in ``format`` (see ``FORMATS``), with ``metadata``.
 
     ``environment``: (pixels, strength, euler) of the world image for the glTF specular cube
-    (``world_environment``), or None; ``filament_frame``: a key of ``FILAMENT_FRAMES``.
+    (``world_environment``), or (pixels, strength, euler, colour) with ``colour`` the 3×3
+    matrix from the pixels' RGB to the coefficients' space, or None (only glTF reads it);
+    ``filament_frame``: a key of ``FILAMENT_FRAMES``.
     """
     key = _format_id(format)
     metadata = dict(metadata or {})
@@ -202,9 +203,10 @@ def export_text(coeffs, format="sh_lighting", metadata=None, environment=None,
     if key == "threejs":
         d = to_threejs_json(coeffs, metadata.get("name", ""), extras)
         return json.dumps(d, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    pixels, strength, euler = environment or (None, 1.0, None)
+    pixels, strength, euler, *colour = environment or (None, 1.0, None)
     extras["specular_source"] = "world image" if pixels is not None else "9-term lighting"
-    return gltf_text(coeffs, pixels, strength, euler, metadata.get("name", ""), extras)
+    return gltf_text(coeffs, pixels, strength, euler, metadata.get("name", ""), extras,
+                     colour=colour[0] if colour else None)
 
 
 def to_export_space(coeffs, error=ValueError):
@@ -223,8 +225,9 @@ def from_preset_space(coeffs):
 def export_coefficients(coeffs, path, format="sh_lighting", overwrite=False, metadata=None,
                         environment=None, filament_frame="cmgen"):
     """Write ``coeffs`` (9, 3, in the file's working space) to ``path`` in ``format``,
-    converted to ``EXPORT_SPACE`` (``to_export_space``; so are the pixels of
-    ``environment``), atomically; returns the Path.
+    converted to ``EXPORT_SPACE`` (``to_export_space``; so is the specular cube made from
+    ``environment``'s pixels, for glTF, the only format that reads them), atomically;
+    returns the Path.
 
     ``environment`` and ``filament_frame`` as for :func:`export_text`. FileExistsError if
     ``path`` exists and ``overwrite`` is false (nothing written); ValueError (PresetError for
@@ -235,12 +238,12 @@ def export_coefficients(coeffs, path, format="sh_lighting", overwrite=False, met
     metadata.setdefault("name", path.stem)
     error = PresetError if _format_id(format) == "sh_lighting" else ValueError
     coeffs = to_export_space(coeffs, error)
-    if environment is not None:
-        pixels, strength, euler = environment
-        pixels = convert_coefficients(
-            np.asarray(pixels)[..., :3], compat.working_space(), EXPORT_SPACE
-        )
-        environment = (pixels, strength, euler)
+    if environment is not None and _format_id(format) == "gltf":
+        pixels, strength, euler = environment  # converted on the cube's small source
+        colour = conversion_matrix(compat.working_space(), EXPORT_SPACE)
+        environment = (pixels, strength, euler, colour)
+    else:
+        environment = None  # the other formats carry no image: nothing per texel
     # every check happens before any write
     text = export_text(coeffs, format, metadata, environment, filament_frame)
     return atomic.write_text_atomic(path, text, overwrite, what="file", hint=OVERWRITE_HINT)

@@ -220,6 +220,51 @@ def test_exports_are_linear_rec709_and_presets_come_back(tmp_path, addon):
     assert rel_err(scene_data.get_coefficients(scene), acescg) < 1e-9
 
 
+class Untouchable:
+    """World pixels that fail the test when anything reads them."""
+
+    def __array__(self, *args, **kwargs):
+        raise AssertionError("the world image was read for a format that carries none")
+
+    def __getitem__(self, key):
+        raise AssertionError("the world image was read for a format that carries none")
+
+
+@pytest.mark.parametrize("fmt", ["sh_lighting", "threejs", "filament"])
+def test_formats_without_an_image_never_read_the_world_image(tmp_path, fmt):
+    """The formats that carry 9 numbers only cost nothing per texel (``compute --out a.json``
+    of an 8K map spent 1.8 s and 800 MB converting the whole map's colour space for them)."""
+    from sh_lighting.blender.presets import preset_io
+
+    coeffs = np.arange(27, dtype=float).reshape(9, 3) / 27 + 0.1
+    path = preset_io.export_coefficients(coeffs, tmp_path / f"p.{fmt}", fmt,
+                                         environment=(Untouchable(), 1.0, None))
+    assert path.stat().st_size > 0
+
+
+@needs_working_spaces
+def test_gltf_specular_cube_of_an_acescg_file_is_the_rec709_images(tmp_path):
+    """The cube's colour conversion, done on its downsampled source, gives what converting the
+    whole image first gives (both are linear)."""
+    from sh_lighting.blender.presets import preset_io
+    from sh_lighting.formats.gltf import gltf_text
+
+    set_working_space("ACEScg")
+    rng = np.random.default_rng(3)
+    pixels = (rng.random((128, 256, 4)) * [1.0, 0.5, 0.2, 1.0]).astype(np.float32)
+    pixels[20:30, 40:60, :3] = [30.0, 5.0, 1.0]
+    coeffs = project_equirect(pixels)
+    path = preset_io.export_coefficients(coeffs, tmp_path / "e.gltf", "gltf",
+                                         environment=(pixels, 2.0, (0.1, 0.2, 0.3)))
+    matrix = colour.conversion_matrix("ACEScg", "Linear Rec.709")
+    expected = json.loads(gltf_text(
+        colour.convert_coefficients(coeffs, "ACEScg"), pixels[..., :3] @ matrix.T, 2.0,
+        (0.1, 0.2, 0.3)))
+    written = json.loads(path.read_text())
+    assert written["images"] == expected["images"]
+    set_working_space("Linear Rec.709")
+
+
 @needs_working_spaces
 def test_compute_again_follows_a_switched_working_space(tmp_path):
     """Compute has no cache (benchmarks/REPORT.md, "the world cache"): computing again after
