@@ -2,7 +2,9 @@
 
 Keep BSDF hides the world from EEVEE's lighting, reflections included. ``write_maps`` stores
 the world prefiltered with GGX at ``core.glossy.ROUGHNESS_LEVELS`` as packed float images
-(``IMAGE_MARKER``); ``add_eevee_reflections`` gives each Principled BSDF an EEVEE-only emission
+(``IMAGE_MARKER``), the add-on's by identity: each image's record names the image itself and
+the world's record lists its maps by name, so a user's copy is never rewritten or deleted.
+``add_eevee_reflections`` gives each Principled BSDF an EEVEE-only emission
 coverage · P(r_eff, N + t (R − N)) · (F0 · A(r, n·v) + B(r, n·v)) (the split sum of
 ``core.glossy``, with multiple scattering), F0 = (1 − Metallic) F0_IOR + Metallic · Base Color,
 t and r_eff read from a 16 × 16 table image. Other reflecting shaders, Coat and Sheen are not
@@ -20,8 +22,12 @@ from ..data.node_links import source_socket
 from ..world.reader import WorldError, read_world, world_radiance
 from .keep_bsdf import PRINCIPLED, coverage_factors, dielectric_f0, product
 
-# Custom property of the images made here: JSON {"world": world name, "roughness": level}.
+# Custom property of the images made here: JSON {"world": world name, "roughness": level,
+# "image": the image's own name} (an older version's has no "image": its name was the one
+# ``_made_name`` gives).
 IMAGE_MARKER = "sh_lighting_glossy"
+# Custom property of a world with maps: JSON {"world": its name, "maps": [image names]}.
+WORLD_MARKER = "sh_lighting_glossy_maps"
 LABEL = "SH glossy"
 # Shaders with reflections the maps do not give back in EEVEE (4.2-5.0 names).
 UNMODELLED_SHADERS = frozenset({
@@ -38,9 +44,48 @@ TABLE_RECORD = {"table": "split sum", "version": 2}
 
 def _record(image):
     try:
-        return json.loads(image[IMAGE_MARKER])
+        record = json.loads(image[IMAGE_MARKER])
     except (KeyError, ValueError, TypeError):
         return None
+    return record if isinstance(record, dict) else None
+
+
+def _made_name(record):
+    """The name an image of ``record`` was given when it was made (older records)."""
+    if "table" in record:
+        return f"{LABEL} split sum"
+    try:
+        return f"{LABEL} {record['world']} r{float(record['roughness']):.2f}"
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def is_made(image):
+    """Whether ``image`` is one the add-on made (a map or the split-sum table), by identity:
+    its record names the image itself, which a copy (another name) does not."""
+    if image.library is not None or IMAGE_MARKER not in image:
+        return False
+    record = _record(image)
+    return record is not None and record.get("image", _made_name(record)) == image.name
+
+
+def _world_record(world):
+    try:
+        record = json.loads(world[WORLD_MARKER])
+    except (KeyError, ValueError, TypeError):
+        return None
+    return record if isinstance(record, dict) and isinstance(record.get("maps"), list) else None
+
+
+def _owns(world, record):
+    """Whether the maps of ``world``'s ``record`` are its own: it is the world the record
+    names, or no other world holds the same record (a rename). Another world with the same
+    record makes this one its copy (a copy inherits custom properties)."""
+    if record.get("world") == world.name:
+        return True
+    text = world[WORLD_MARKER]
+    return not any(other != world and other.get(WORLD_MARKER) == text
+                   for other in bpy.data.worlds)
 
 
 def maps_of(world):
@@ -48,11 +93,21 @@ def maps_of(world):
     None when there is not a full set."""
     if world is None:
         return None
-    found = {}
+    record = _world_record(world)
+    if record is not None:
+        if not _owns(world, record):
+            return None
+        images = [bpy.data.images.get(name) for name in record["maps"]]
+        if len(images) == len(ROUGHNESS_LEVELS) and all(
+                image is not None and is_made(image)
+                and _record(image).get("roughness") == r
+                for image, r in zip(images, ROUGHNESS_LEVELS)):
+            return images
+        return None
+    found = {}  # a file from before the world's record: by the images' world name
     for image in bpy.data.images:
-        record = _record(image) if IMAGE_MARKER in image else None
-        if record is not None and record.get("world") == world.name and image.library is None:
-            found[record.get("roughness")] = image
+        if is_made(image) and _record(image).get("world") == world.name:
+            found[_record(image).get("roughness")] = image
     if any(r not in found for r in ROUGHNESS_LEVELS):
         return None
     return [found[r] for r in ROUGHNESS_LEVELS]
@@ -74,7 +129,6 @@ def write_maps(scene, radiance=None):
         if image is None:
             image = bpy.data.images.new(f"{LABEL} {world.name} r{r:.2f}", width, height,
                                         alpha=False, float_buffer=True)
-            image[IMAGE_MARKER] = json.dumps({"world": world.name, "roughness": r})
         elif tuple(image.size) != (width, height):
             image.scale(width, height)
         image.colorspace_settings.name = compat.working_space()  # that of the pixels
@@ -85,7 +139,11 @@ def write_maps(scene, radiance=None):
         rgba[..., :3] = level[::-1]  # Image.pixels are bottom row first
         image.pixels.foreach_set(rgba.ravel())
         image.pack()
+        image[IMAGE_MARKER] = json.dumps({"world": world.name, "roughness": r,
+                                          "image": image.name})
         written.append(image)
+    world[WORLD_MARKER] = json.dumps({"world": world.name,
+                                      "maps": [image.name for image in written]})
     return written
 
 
@@ -99,9 +157,13 @@ def follow_world(scene, radiance=None):
 
 
 def remove_maps():
-    """Delete every image ``write_maps`` made (Remove, once no material uses them)."""
-    for image in [i for i in bpy.data.images if IMAGE_MARKER in i and i.library is None]:
+    """Delete every image made here (Remove, once no material uses them): the maps and the
+    table, by identity (``is_made``: a user's copy stays), and the worlds' records of them."""
+    for image in [i for i in bpy.data.images if is_made(i)]:
         bpy.data.images.remove(image)
+    for world in bpy.data.worlds:
+        if world.library is None and WORLD_MARKER in world:
+            del world[WORLD_MARKER]
 
 
 def unmodelled(leaves):
@@ -265,7 +327,9 @@ def table_image():
     an older table (A and B only, read by the nodes of an older Apply) is left to those
     nodes; Remove deletes both."""
     for image in bpy.data.images:
-        if image.library is None and _record(image) == TABLE_RECORD:
+        record = _record(image) if is_made(image) else None
+        if record is not None and {k: v for k, v in record.items() if k != "image"} == (
+                TABLE_RECORD):
             return image
     table = environment_brdf_table()
     size = table.shape[0]
@@ -273,7 +337,7 @@ def table_image():
                                 float_buffer=True)
     image.colorspace_settings.name = "Non-Color"
     image.use_half_precision = False
-    image[IMAGE_MARKER] = json.dumps(TABLE_RECORD)
+    image[IMAGE_MARKER] = json.dumps({**TABLE_RECORD, "image": image.name})
     rgba = np.ones((size, 2 * size, 4), dtype=np.float32)
     rgba[:, :size, :3] = table[..., :3]
     rgba[:, size:, :3] = table[..., 3:]

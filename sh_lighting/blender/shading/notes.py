@@ -82,7 +82,9 @@ def shared_scene_notes(scene, names):
     The materials' SH term reads the coefficients of the scene being rendered, and Apply has
     switched that scene's world's diffuse light off too (counted once): so a scene without
     coefficients gets no diffuse light from its world at all on them, and its other materials
-    none on theirs. Nothing for scenes where both are in place.
+    none on theirs. Nothing for scenes where both are in place. And a line per other scene
+    with another world whose EEVEE reflections on these materials are now this world's maps
+    (one material looks up one set: Apply in scene B switches scene A's).
     """
     wanted = set(names)
     lines = []
@@ -90,6 +92,14 @@ def shared_scene_notes(scene, names):
         shown = sorted(wanted & scene_materials(other))
         if other == scene or not shown or other.world is None:
             continue
+        reflecting = _reflecting_here(scene, other, shown)
+        if reflecting:
+            lines.append(
+                f"scene '{other.name}' shows {len(reflecting)} of these material(s) "
+                f"('{reflecting[0]}'{', ...' if len(reflecting) > 1 else ''}), whose EEVEE "
+                f"reflections there are now of world '{scene.world.name}', not of its world "
+                f"'{other.world.name}' (a material reflects one world: give scene "
+                f"'{other.name}' its own copy of them, then Apply there)")
         missing = []
         if not scene_data.has_coefficients(other):
             missing.append("it has no SH coefficients (Compute there)")
@@ -103,6 +113,23 @@ def shared_scene_notes(scene, names):
                          f"world '{other.world.name}' gives no diffuse light there either, but "
                          f"{' and '.join(missing)}")
     return lines
+
+
+def _reflecting_here(scene, other, shown):
+    """The materials of ``shown`` whose EEVEE reflections (``glossy``'s maps of ``scene``'s
+    world) ``other``, whose world is another, shows instead of its own world's."""
+    if other.world is None or scene.world is None or other.world == scene.world:
+        return []
+    maps = {image.as_pointer() for image in glossy.maps_of(scene.world) or ()}
+    found = []
+    for name in shown:
+        material = bpy.data.materials.get(name)
+        tree = getattr(material, "node_tree", None)
+        if tree is not None and any(
+                getattr(node, "image", None) is not None and node.image.as_pointer() in maps
+                for node in tree.nodes):
+            found.append(name)
+    return found
 
 
 def reflection_note(scene, names):

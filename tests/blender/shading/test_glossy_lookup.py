@@ -80,7 +80,10 @@ def test_table_image_holds_the_four_channels_and_replaces_an_older_table():
     old = bpy.data.images.new("SH glossy split sum", 16, 16, alpha=False, float_buffer=True)
     old[glossy.IMAGE_MARKER] = json.dumps({"table": "split sum"})
     image = glossy.table_image()
-    assert image != old and json.loads(image[glossy.IMAGE_MARKER]) == glossy.TABLE_RECORD
+    assert image != old and json.loads(image[glossy.IMAGE_MARKER]) == {
+        **glossy.TABLE_RECORD, "image": image.name}  # its own name: a copy is not the table
+    assert glossy.is_made(old) and glossy.is_made(image)  # Remove deletes both
+    assert glossy.table_image() == image
     size = core_glossy.TABLE_SIZE
     assert tuple(image.size) == (2 * size, size) and not image.use_half_precision
     pixels = np.empty(size * size * 8, dtype=np.float32)
