@@ -127,15 +127,16 @@ def delete_transfer(obj):
     return _transfer.remove_transfer(obj)
 
 
-def extract_lights(scene, count=3, error_target=None, size_limit=_lights.SIZE_LIMIT):
+def extract_lights(scene, count=3, error_target=None, size_limit=_lights.SIZE_LIMIT,
+                   nonfinite="raise"):
     """Take up to ``count`` compact bright sources of the world image out as Sun lights and
     store the coefficients of the rest (``blender.design.lights``); an ``error_target``
     (fraction of the world's light) stops earlier; sources wider than ``size_limit`` (radians
     across) stay in the SH. The rest also becomes the Reset values; the lights it made earlier
     (never an artist's, nor a duplicate of one) are updated or deleted, and Compute from World
     deletes them. Returns a ``LightsInfo`` (``.report()``: one line saying what was found and
-    why not more)."""
-    return _lights.extract_lights(scene, count, error_target, size_limit)
+    why not more). ``nonfinite`` "zero": NaN/Inf texels of the world image count as black."""
+    return _lights.extract_lights(scene, count, error_target, size_limit, nonfinite)
 
 
 def split_sun(scene):

@@ -91,7 +91,7 @@ def run(args):
     if args.lights is not None:
         before_long("extracting lights", texels / PASS_TEXELS_PER_SECOND)
         with timed_stage("Extract Lights"):
-            coeffs, count = _lights(source, scene, hdri, args.lights)
+            coeffs, count = _lights(source, scene, hdri, args.lights, args.nonfinite)
         metadata["notes"] = (metadata.get("notes", "") + f" {count} light(s) extracted: these "
                              "coefficients hold the rest of the world.").strip()
         metadata.pop("error_estimate", None)  # it was the whole world's
@@ -193,9 +193,10 @@ def _world(args):
     return source, scene, coeffs, metadata
 
 
-def _lights(source, scene, hdri, count):
-    """Up to ``count`` lights out of ``hdri`` (``scene`` None) or the world of ``scene``;
-    prints them, returns the rest's (9, 3) coefficients and the number of lights."""
+def _lights(source, scene, hdri, count, nonfinite="raise"):
+    """Up to ``count`` lights out of ``hdri`` (``scene`` None) or the world of ``scene`` (its
+    NaN/Inf texels black with ``nonfinite`` "zero", as for the coefficients); prints them,
+    returns the rest's (9, 3) coefficients and the number of lights."""
     try:
         if scene is None:
             from ..api import hdri_lights
@@ -206,7 +207,7 @@ def _lights(source, scene, hdri, count):
         else:
             from .. import api
 
-            info = api.extract_lights(scene, count)
+            info = api.extract_lights(scene, count, nonfinite=nonfinite)
             extraction, coeffs = info.extraction, info.coefficients
             found = [(obj.rotation_euler.to_matrix().col[2][:], obj.data.angle,
                       obj.data.color[:], obj.data.energy, light.power_fraction)

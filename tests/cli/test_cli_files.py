@@ -446,6 +446,28 @@ def test_compute_of_a_blend_takes_nonfinite_zero_and_names_the_option(tmp_path):
     assert_allclose(coeffs[0, [0, 2]], EXACT[0, [0, 2]], rtol=1e-6)
 
 
+def test_compute_of_a_blend_with_lights_takes_nonfinite_zero_as_without(tmp_path):
+    """``--nonfinite zero --lights 2`` on a .blend was refused ("repair the image first")
+    although ``--nonfinite zero`` alone worked: the lights are taken from the same repaired
+    image, as for an HDRI file."""
+    from cli_runs import build_blend
+
+    pixels = constant_pixels(SKY)
+    pixels[2, 3, 1] = np.nan
+    hdri = write_exr(tmp_path / "nan.exr", pixels)
+    blend = build_blend(tmp_path / "nan.blend", hdri)
+    line = one_error_line(run("compute", blend, "--lights", "2"))
+    assert "pass --nonfinite zero to treat those texels as black" in line
+    outs = []
+    for source in (blend, hdri):
+        out = tmp_path / f"{Path(source).suffix[1:]}.json"
+        result = run("compute", source, "--nonfinite", "zero", "--lights", "2", "--out", out)
+        assert result.returncode == 0, result.stderr
+        assert "light(s) extracted" in result.stdout
+        outs.append(read_preset(out)[0])
+    assert_allclose(outs[0], outs[1], rtol=1e-5, atol=1e-7)
+
+
 def test_a_truncated_exr_is_one_error_line_and_the_batch_goes_on(tmp_path):
     """The EXR reader of bpy 5.0.1 crashed the process (SIGSEGV) on an EXR cut
     short, and batch died after its first file with no summary."""

@@ -19,6 +19,7 @@ import numpy as np
 from mathutils import Matrix, Vector
 
 from ...core import lights as core_lights
+from ...core.equirect import zero_nonfinite
 from ...core.world_map import map_coefficients, sun_light_rotation, to_world_direction
 from ..data import scene_data
 from ..world import reader
@@ -190,15 +191,18 @@ def _half(size_limit):
     return 0.5 * size_limit if core_lights.real_number(size_limit) else size_limit
 
 
-def extract_lights(scene, count=3, error_target=None, size_limit=SIZE_LIMIT):
+def extract_lights(scene, count=3, error_target=None, size_limit=SIZE_LIMIT, nonfinite="raise"):
     """Take up to ``count`` lights out of the world image (module docstring); ``LightsInfo``.
 
     ``error_target``: stop once the mean error of SH + lights is at most this fraction of the
     world's light. ``size_limit``: radians across; larger sources stay in the SH (up to
     ``2 core.lights.LARGEST_RADIUS``). A ValueError (``reader.WorldError``,
     ``edits.DesignError``) with nothing changed when the world is not an equirect image, an
-    argument is wrong or a light would not fit Blender's float32 values.
+    argument is wrong or a light would not fit Blender's float32 values. ``nonfinite``
+    "zero": NaN/Inf texels of the world image count as black (as Compute from World's).
     """
+    if nonfinite not in ("raise", "zero"):
+        raise ValueError(f'nonfinite must be "raise" or "zero", got {nonfinite!r}')
     started = time.perf_counter()
     source = reader.read_world(scene)
     if isinstance(source, reader.ProceduralSource):
@@ -215,7 +219,10 @@ def extract_lights(scene, count=3, error_target=None, size_limit=SIZE_LIMIT):
     if not strength > 0.0:
         raise edits.DesignError(
             f"world '{source.world}' has Strength {strength:g}: no light to extract")
-    extraction = core_lights.extract_lights(source.pixels(), count, error_target,
+    pixels = source.pixels()
+    if nonfinite == "zero":
+        pixels = zero_nonfinite(pixels)
+    extraction = core_lights.extract_lights(pixels, count, error_target,
                                              max_radius=_half(size_limit),
                                              luminance=edits.luminance())
     rest = map_coefficients(extraction.rest, strength, source.rotation)
