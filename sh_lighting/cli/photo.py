@@ -123,6 +123,8 @@ def run(args):
                     if chrome is not None or args.prior == "chrome" else None)
     except ValueError as error:
         raise CommandError(f"{image}: {error}") from None
+    if fit.warning() is not None:  # first: a wrong circle reads as a poor fit
+        say(f"warning: {image}: {fit.warning()}")
     say(f"Photo {image}: {fit.summary()}")
     if exposure is not None:
         say(f"Both balls: {exposure.summary()}")
@@ -131,8 +133,9 @@ def run(args):
         say(line)
     if out is not None:
         remove_own_leftovers(out)
+        warning = f" Warning: {fit.warning()}." if fit.warning() else ""
         metadata = {"name": image.stem, "notes": f"Fitted to a grey ball in {image.name}: "
-                    f"{fit.summary()}."}
+                    f"{fit.summary()}.{warning}"}
         try:
             path = api.export_coefficients(coeffs, out, args.format, args.overwrite,
                                                  metadata)

@@ -33,6 +33,9 @@ MAX_RESIDUAL = 0.1
 # hard sun has a larger residual (38 % of its mean, the terminator) but the nine terms
 # explain 90 % of its variation; noise or a background explains almost nothing.
 MAX_UNEXPLAINED = 0.5
+# Texels inside the circle with alpha below 1 (a cut-out's background): left out up to this
+# share of the circle's (its anti-aliased edge), refused above (the circle is off).
+MAX_TRANSPARENT = 0.05
 WEAK_SINGULAR = 0.1  # σ / σ_max below which a direction of the nine terms is poorly fixed
 WEAK_LOADING = 0.3  # |component| of such a singular vector that names a term
 PRIOR_NORMALS = 400  # lattice normals the prior may be placed on (``sh.spread_normals``)
@@ -91,6 +94,10 @@ class PhotoFit:
     values: np.ndarray
     towards: np.ndarray
 
+    def warning(self):
+        """``poor_fit_warning`` of this fit: the line to show first, or None."""
+        return poor_fit_warning(self.residual)
+
     def summary(self):
         """One line for the user: residual, condition, poorly constrained terms, pixels."""
         weak = ", ".join(self.weak_terms) if self.weak_terms else "none"
@@ -105,6 +112,20 @@ class PhotoFit:
             + (f" (weight {self.prior_weight:.2g} of the pixels'{scale})"
                if self.prior != "none" else "")
         )
+
+
+def poor_fit_warning(residual):
+    """The line to show first (None if fine) for a fit whose ``residual`` is above
+    ``MAX_RESIDUAL`` yet was not refused (the nine terms explain much of how its pixels vary):
+    most often a wrong circle (centred on the rim, twice the ball: 37 % and 33 % measured,
+    L00 0.5× and 2.3× the right one), or a ball that is not matte grey; a single hard light
+    on the right circle also gives this much (38 %)."""
+    if not residual > MAX_RESIDUAL:
+        return None
+    return (f"poor fit: the pixels in the circle are {100.0 * residual:.0f} % (RMS) from the "
+            "best nine-term picture (a matte ball: a few %): check that the circle sits on the "
+            "ball's outline (its centre and radius) and that the ball is matte grey and not "
+            "clipped (a single hard light, a sun, can do this too)")
 
 
 def design_matrix(normals, albedo=1.0):
@@ -232,7 +253,7 @@ def prior_observations(prior, plain, normals, towards, values_mean, albedo, refe
 def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
               margin=DEFAULT_MARGIN, clip=None, prior="mirror",
               prior_weight=DEFAULT_PRIOR_WEIGHT, mask=None, max_residual=MAX_RESIDUAL,
-              reference=None):
+              reference=None, opaque=None):
     """The nine RGB L_lm of the world lighting a grey ball in a photo (module docstring).
 
     ``pixels``: (H, W, 3 or 4) linear RGB, rows top to bottom (alpha ignored); ``circle``:
@@ -242,7 +263,9 @@ def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
     ``mask``: (H, W) bool, False where the ball is hidden; ``max_residual``: above it the
     pixels are not a diffuse ball's and a PhotoError is raised (None: never); ``reference``:
     for prior "chrome" the chrome ball's (9, 3) L_lm, for "photo" the second photo's
-    ``PhotoFit`` (fitted with prior "none").
+    ``PhotoFit`` (fitted with prior "none"); ``opaque``: (H, W) bool, False where a photo
+    with alpha is transparent (a cut-out's background): such texels inside the circle are
+    left out, and refused above ``MAX_TRANSPARENT`` of them (the circle is off the ball).
     Returns a ``PhotoFit``; raises PhotoError with one line saying what to do.
     """
     a = _check_inputs(pixels, albedo, margin, prior, prior_weight, reference)
@@ -253,6 +276,16 @@ def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
     usable = np.isfinite(values).all(axis=1)
     if mask is not None:
         usable &= np.asarray(mask, dtype=bool)[rows, cols]
+    if opaque is not None:
+        seen = np.asarray(opaque, dtype=bool)[rows, cols]
+        transparent = int((~seen).sum())
+        if transparent > MAX_TRANSPARENT * seen.size:
+            raise PhotoError(
+                f"{transparent} of the {seen.size} pixels inside the circle are transparent "
+                "(alpha below 1: a cut-out's background): check the circle, it reaches past "
+                "the ball"
+            )
+        usable &= seen
     if clip is None:
         clipped = np.zeros_like(usable)
     elif np.ndim(clip) == 2:

@@ -3,7 +3,7 @@ user runs it (a fresh process), on a computed photo of a grey ball (core.photo.b
 
 import numpy as np
 import pytest
-from blender_files import write_exr
+from blender_files import write_exr, write_png
 from cli_runs import run
 
 from sh_lighting.choices import PHOTO_PRIORS
@@ -38,6 +38,41 @@ def test_from_photo_prints_the_report_and_writes_the_preset(tmp_path):
     stored, metadata = read_preset(out)
     assert "Fitted to a grey ball in ball.exr" in metadata["notes"]
     assert np.abs(stored - LIGHT).max() < 1e-4 * np.abs(LIGHT).max()
+
+
+def test_from_photo_warns_first_of_a_circle_off_the_ball(tmp_path):
+    """A circle centred on the ball's rim: its first line says the fit is poor and what to
+    check (the command cannot know which circle is right; the preset is still written)."""
+    camera = camera_looking((0.0, 1.0, 0.0))
+    picture = core_photo.ball_picture(LIGHT, 128, 128, (64, 64, 30), camera, background=0.2)
+    photo = write_exr(tmp_path / "ball.exr", picture)
+    result = run("from-photo", photo, "--circle", 94, 64, 30, "--direction", 0, 1, 0)
+    assert result.returncode == 0, result.stderr
+    first = result.stdout.splitlines()[0]
+    assert first.startswith(f"warning: {photo}: poor fit: the pixels in the circle are "), first
+    assert "check that the circle sits on the ball's outline" in first
+    right = run("from-photo", photo, "--circle", 64, 64, 30, "--direction", 0, 1, 0)
+    assert right.returncode == 0 and "warning" not in right.stdout
+
+
+def test_from_photo_takes_a_cut_out_rgba_png(tmp_path):
+    """An 8-bit RGBA PNG, the ball opaque on a transparent background: fitted from the ball
+    (the command line has no Alpha mode to set)."""
+    camera = camera_looking((0.0, 1.0, 0.0))
+    picture = core_photo.ball_picture(LIGHT, 96, 96, (48, 48, 40), camera)
+    codes = np.round(255.0 * np.clip(picture / picture.max(), 0.0, 1.0) ** (1 / 2.2))
+    y, x = np.mgrid[0:96, 0:96] + 0.5
+    inside = (x - 48) ** 2 + (y - 48) ** 2 <= 41.0**2
+    codes[~inside] = 0.0
+    cut = write_png(tmp_path / "cut.png", codes, alpha=np.where(inside, 255.0, 0.0))
+    plain = write_png(tmp_path / "plain.png", codes)
+    results = [run("from-photo", path, "--circle", 48, 48, 40, "--direction", 0, 1, 0,
+                   "--prior", "none") for path in (cut, plain)]
+    assert [r.returncode for r in results] == [0, 0], results[0].stderr
+    table = [r.stdout[r.stdout.index("L00"):] for r in results]
+    assert table[0] == table[1]
+    wide = run("from-photo", cut, "--circle", 48, 48, 47, "--direction", 0, 1, 0)
+    assert wide.returncode == 1 and "transparent" in wide.stderr, wide.stderr
 
 
 def test_from_photo_refuses_bad_input_in_one_line(tmp_path):

@@ -34,12 +34,14 @@ HDR_FORMATS = {"OPEN_EXR", "OPEN_EXR_MULTILAYER", "HDR"}
 
 @dataclass(frozen=True)
 class PhotoSource:
-    """A photo as read: linear (H, W, 4) pixels, its clipped pixels (H, W) bool, the file."""
+    """A photo as read: linear (H, W, 4) pixels, its clipped pixels (H, W) bool, the file,
+    and where an 8-bit photo with alpha is opaque ((H, W) bool; None: all of it)."""
 
     pixels: np.ndarray
     clipped: np.ndarray
     path: str
     file_format: str
+    opaque: np.ndarray = None
 
 
 def read_photo(path):
@@ -54,8 +56,14 @@ def read_photo(path):
         raise PhotoError(f"Blender could not open photo '{path}' as an image: {error}") from None
     try:
         raw = images.image_pixels(image)
-        pixels = images.linear_pixels(image)
+        # a cut-out (the ball opaque, the rest transparent): only the circle's texels matter,
+        # and the fit leaves out (or refuses) transparent ones there
+        pixels = images.linear_pixels(image, keep_transparent=True)
         file_format = image.file_format
+        opaque = None
+        if not image.is_float and image.alpha_mode in ("STRAIGHT", "PREMUL"):
+            alpha = raw[..., 3]
+            opaque = None if (alpha >= 1.0).all() else alpha >= 1.0
         if not image.is_float:
             clipped = (raw[..., :3] >= 1.0).any(axis=-1)  # a byte of 255
         elif file_format in HDR_FORMATS:
@@ -64,7 +72,7 @@ def read_photo(path):
             clipped = (raw[..., :3] >= 1.0 - 1e-6).any(axis=-1)  # the top code of the file
     finally:
         bpy.data.images.remove(image)
-    return PhotoSource(pixels, clipped, path, file_format)
+    return PhotoSource(pixels, clipped, path, file_format, opaque)
 
 
 def detect_circle(path):
@@ -163,7 +171,7 @@ def _second_fit(scene, second, first_camera, albedo, margin, clip):
     source = read_photo(second.path)
     try:
         fit = fit_photo(source.pixels, second.circle, camera, albedo=albedo, margin=margin,
-                        clip=_clipped(source, clip), prior="none")
+                        clip=_clipped(source, clip), prior="none", opaque=source.opaque)
     except PhotoError as error:
         raise PhotoError(f"second photo '{os.path.basename(source.path)}': {error}") from None
     record = {"file": os.path.basename(source.path),
@@ -194,7 +202,7 @@ def coefficients_from_photo(scene, path, circle, *, camera_object=None, directio
         reference, extra = _second_fit(scene, second, camera, albedo, margin, clip)
     fit = fit_photo(source.pixels, circle, camera, albedo=albedo, margin=margin,
                     clip=_clipped(source, clip), prior=prior, prior_weight=prior_weight,
-                    reference=reference)
+                    reference=reference, opaque=source.opaque)
     if fit.prior_scale is not None:
         extra["prior_scale"] = [float(v) for v in fit.prior_scale]
         match = match_exposure(fit.coefficients, reference, fit.normals)
@@ -211,6 +219,8 @@ def coefficients_from_photo(scene, path, circle, *, camera_object=None, directio
         "condition": fit.condition, "used": fit.used, "clipped": fit.clipped,
         "weak_terms": list(fit.weak_terms), **extra,
     }
+    if fit.warning() is not None:
+        record["warning"] = fit.warning()
     if camera.projection == "PERSP":
         record.update(focal_mm=camera.focal_mm, sensor_mm=camera.sensor_mm,
                       sensor_fit=camera.sensor_fit)

@@ -36,10 +36,6 @@ PROJECTION_ITEMS = (
     ("ORTHO", "Orthographic", "Parallel view rays (a long lens far away)"),
     ("PERSP", "Perspective", "View rays through a lens of the focal length and sensor below"),
 )
-# A residual above this (of the mean) is reported as a warning: the ball may not be matte
-# or the circle may be off (the fit is still stored; above core.photo.MAX_RESIDUAL with
-# little explained, it is refused).
-WARN_RESIDUAL = 0.1
 
 
 class SHLIGHT_OT_match_photo(bpy.types.Operator):
@@ -157,13 +153,13 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, f"Match Photo: {error}")
             return {"CANCELLED"}
-        kind = {"WARNING"} if result.residual > WARN_RESIDUAL else {"INFO"}
-        note = (" (large: is the ball matte and the circle on it?)"
-                if result.residual > WARN_RESIDUAL else "")
+        warning = result.warning()  # first: a wrong circle reads as a poor fit
+        kind = {"WARNING"} if warning else {"INFO"}
+        first = f"Match Photo: {warning}; " if warning else ""
         exposure = scene_data.provenance(context.scene).get("exposure_summary")
         both = f"; {exposure}" if exposure else ""
         keyed = f"; SH lighting {stored.note}" if getattr(stored, "note", "") else ""
-        self.report(kind, f"SH lighting from the photo: {result.summary()}{note}{both}{keyed}")
+        self.report(kind, f"{first}SH lighting from the photo: {result.summary()}{both}{keyed}")
         return {"FINISHED"}
 
 
@@ -263,6 +259,10 @@ def draw_photo(layout, context):
     if record.get("source") == "PHOTO":
         layout.label(text=f"From {record.get('file', '?')}, residual "
                           f"{100.0 * float(record.get('residual', 0.0)):.1f} %", icon="INFO")
+        if record.get("warning"):  # a poor fit (a wrong circle?), in red
+            row = layout.row()
+            row.alert = True
+            row.label(text="Poor fit: check the circle", icon="ERROR")
 
 
 SHLIGHT_PT_world_photo, SHLIGHT_PT_view3d_photo = sub_panels(

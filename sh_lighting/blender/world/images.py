@@ -118,7 +118,7 @@ def undecodable_reason(image):
     )
 
 
-def linear_pixels(image):
+def linear_pixels(image, keep_transparent=False):
     """The radiance Blender renders from ``image``: float32 (H, W, 4), rows top to bottom.
 
     Float images give ``image_pixels``' flipped view as it is (no second copy of the image:
@@ -128,6 +128,8 @@ def linear_pixels(image):
     the image's. Raises DecodeError (a ValueError) when Blender renders the texels otherwise
     (``undecodable_reason``, or 8-bit texels with alpha < 1 in Straight or Premultiplied
     alpha mode), and ValueError when the image has no pixel data (``image_pixels``).
+    ``keep_transparent``: such texels are decoded as stored (straight colour, its alpha
+    beside it) instead, for a caller that leaves them out itself (a photo's cut-out).
     """
     pixels = image_pixels(image)
     reason = undecodable_reason(image)
@@ -136,8 +138,8 @@ def linear_pixels(image):
     # Float images and alpha modes that ignore alpha show the stored colour (measured against
     # Cycles on 4.2 and 5.0); 8-bit texels with alpha < 1 are shown premultiplied.
     if (
-        not image.is_float and image.alpha_mode in ("STRAIGHT", "PREMUL")
-        and (pixels[..., 3] < 1.0).any()
+        not keep_transparent and not image.is_float
+        and image.alpha_mode in ("STRAIGHT", "PREMUL") and (pixels[..., 3] < 1.0).any()
     ):
         raise DecodeError(
             f"8-bit image '{image.name}' has transparent texels, which Blender shows "

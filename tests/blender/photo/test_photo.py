@@ -209,6 +209,69 @@ def test_hostile_input_one_line_and_nothing_changed(case, message, photos, addon
     assert scene_data.provenance(scene) == SCRIPT
 
 
+def match_photo(path, circle):
+    """The Match Photo operator's execute on ``path`` and ``circle`` (scene camera, ORTHO)."""
+    from blender_scenes import run_execute
+
+    from sh_lighting.blender.ui.photo import SHLIGHT_OT_match_photo
+
+    return run_execute(
+        SHLIGHT_OT_match_photo, filepath=str(path), circle=circle, albedo=0.18, margin=0.05,
+        prior="mirror", camera="SCENE", direction=(0.0, 1.0, 0.0), roll=0.0,
+        projection="ORTHO", focal_mm=85.0, sensor_mm=36.0, clip=0.0, chrome_filepath="",
+        second_filepath="", second_circle=circle, second_direction=(0.0, -1.0, 0.0),
+        second_roll=0.0)
+
+
+@pytest.mark.parametrize("where", ["centred on the rim", "twice the radius"])
+def test_a_wrong_circle_is_told_first_with_what_to_check(where, photos, addon):
+    """A circle centred on the ball's rim, or twice its radius, fits its pixels far worse than
+    a matte ball's (L00 0.5x / 2.3x the right one): refused, or a warning that comes first."""
+    scene, _ = grey_ball_scene(photos["sh_world"])
+    cx, cy, r = circle_of("ORTHO")
+    circle = (cx + r, cy, r) if where == "centred on the rim" else (cx, cy, 2.0 * r)
+    result, reports = match_photo(photos["sh_png"], circle)
+    (kinds, text), = reports
+    if result == {"CANCELLED"}:
+        assert kinds == {"ERROR"} and "circle" in text, text
+        return
+    assert kinds == {"WARNING"}, text
+    assert text.startswith("Match Photo: poor fit:"), text
+    assert "check that the circle" in text
+    _, right = match_photo(photos["sh_png"], (cx, cy, r))
+    assert right[0][0] == {"INFO"} and "poor fit" not in right[0][1]
+
+
+def byte_values(path):
+    """The 8-bit file's own values (0-255, rows top to bottom), as Blender loads them."""
+    image = bpy.data.images.load(str(path), check_existing=False)
+    width, height = image.size
+    flat = np.empty(width * height * 4, dtype=np.float32)
+    image.pixels.foreach_get(flat)
+    bpy.data.images.remove(image)
+    return np.round(flat.reshape(height, width, 4)[::-1, :, :3] * 255.0)
+
+
+def test_a_cut_out_rgba_png_is_fitted_where_the_ball_is_opaque(photos, addon, tmp_path):
+    """An 8-bit RGBA PNG with the ball opaque on a transparent background (how a cut-out is
+    saved) gives what the same photo without alpha gives; only transparent texels inside the
+    circle are a problem, said in one line."""
+    scene, _ = grey_ball_scene(photos["sh_world"])
+    cx, cy, r = circle_of("ORTHO")
+    values = byte_values(photos["sh_png"])
+    height, width = values.shape[:2]
+    y, x = np.mgrid[0:height, 0:width] + 0.5
+    inside = (x - cx) ** 2 + (y - cy) ** 2 <= (r + 1.0) ** 2
+    values[~inside] = 0.0  # a cut-out: nothing kept around the ball
+    cut = write_png(tmp_path / "cut_out.png", values, alpha=np.where(inside, 255.0, 0.0))
+    _, plain = api.coefficients_from_photo(scene, photos["sh_png"], (cx, cy, r), store=False)
+    _, fit = api.coefficients_from_photo(scene, cut, (cx, cy, r), store=False)
+    assert fit.used == plain.used
+    assert np.abs(fit.coefficients - plain.coefficients).max() < 1e-6
+    with pytest.raises(ValueError, match=r"transparent.*check the circle"):
+        api.coefficients_from_photo(scene, cut, (cx, cy, 1.5 * r), store=False)
+
+
 def test_a_16bit_png_is_read_as_blender_reads_it(photos, addon, tmp_path):
     scene, _ = grey_ball_scene(photos["sh_world"])
     image = bpy.data.images.load(photos["sh_png"])
