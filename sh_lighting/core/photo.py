@@ -93,10 +93,17 @@ class PhotoFit:
     normals: np.ndarray
     values: np.ndarray
     towards: np.ndarray
+    second_residual: object = None
 
     def warning(self):
-        """``poor_fit_warning`` of this fit: the line to show first, or None."""
-        return poor_fit_warning(self.residual)
+        """``poor_fit_warning`` of this fit (and of the second photo's, prior "photo"): the
+        line to show first, or None."""
+        own = poor_fit_warning(self.residual)
+        second = (None if self.second_residual is None
+                  else poor_fit_warning(self.second_residual))
+        if second is not None:
+            second = f"second photo: {second}"
+        return "; ".join(line for line in (own, second) if line) or None
 
     def summary(self):
         """One line for the user: residual, condition, poorly constrained terms, pixels."""
@@ -325,13 +332,14 @@ def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
         )
     condition, weak = _weak_terms(matrix)
     noise = pixel_noise(a, rows[used], cols[used]) / float(np.mean(mean))
-    coeffs, weight, share, gain = plain, 0.0, 0.0, None
+    coeffs, weight, share, gain, second_residual = plain, 0.0, 0.0, None, None
     seen_values = values
     if prior == "chrome":
         gain = chrome_scale(reference, normals, values, albedo)
         reference = np.asarray(reference, dtype=np.float64) * gain
     elif prior == "photo":
         _check_second_photo(normals, reference)
+        second_residual = reference.residual
         reference = joint_fit(normals, values, reference, albedo)
     if prior != "none" and prior_weight > 0.0:
         where, targets = prior_observations(prior, plain, normals, towards, mean, albedo,
@@ -350,7 +358,8 @@ def fit_photo(pixels, circle, camera=PhotoCamera(), *, albedo=DEFAULT_ALBEDO,
     coeffs = _never_negative(coeffs, matrix, values, albedo, count)
     return PhotoFit(coeffs, plain, residual, noise, condition, weak, count, n_clipped,
                     int((~usable).sum()), prior, float(share), gain,
-                    negative_light_warning(coeffs), normals, seen_values, np.asarray(towards))
+                    negative_light_warning(coeffs), normals, seen_values, np.asarray(towards),
+                    second_residual)
 
 
 def _check_second_photo(normals, second):

@@ -18,10 +18,12 @@ from sh_lighting.core.irradiance import irradiance, reference_irradiance
 from sh_lighting.core.minimum import irradiance_minimum, mean_irradiance
 from sh_lighting.core.mirror_ball import mirror_ball_image, project_mirror_ball
 from sh_lighting.core.photo import (
+    MAX_RESIDUAL,
     ball_picture,
     best_nine_term_error,
     fit_photo,
     match_exposure,
+    poor_fit_warning,
     relative_rms,
     scaled_error,
 )
@@ -307,3 +309,35 @@ def test_hostile_photos_are_refused_in_one_line():
         assert "\n" not in str(info.value)
     with pytest.raises(PhotoError, match="not a rotation"):
         fit_photo(picture, CIRCLE, PhotoCamera(((2.0, 0, 0), (0, 1, 0), (0, 0, 1))))
+
+
+@pytest.mark.parametrize("circle", [(94.0, 64.0, 30.0), (64.0, 64.0, 60.0)])
+def test_a_circle_off_the_ball_is_a_poor_fit_told_with_what_to_check(circle):
+    """A circle centred on the ball's rim or twice its radius: not refused (the nine terms
+    explain much of how its pixels vary), but the fit's warning says to check the circle."""
+    picture = ball_picture(LIGHT, 128, 128, (64.0, 64.0, 30.0), FRONT, background=0.2)
+    right = fit_photo(picture, (64.0, 64.0, 30.0), FRONT, prior="none")
+    assert right.warning() is None
+    fit = fit_photo(picture, circle, FRONT, prior="none")
+    assert fit.residual > MAX_RESIDUAL
+    assert fit.warning() == poor_fit_warning(fit.residual)
+    assert fit.warning().startswith("poor fit: the pixels in the circle are ")
+    assert "check that the circle sits on the ball's outline" in fit.warning()
+    # a second photo's wrong circle is told too (prior "photo"; on its darker side, against
+    # this background, the rim-centred circle's residual is 9 %: only a brighter one shows)
+    back = camera_looking((0.0, -1.0, 0.0))
+    second = fit_photo(ball_picture(LIGHT, 128, 128, (64.0, 64.0, 30.0), back,
+                                    background=0.6), circle, back, prior="none")
+    joint = fit_photo(picture, (64.0, 64.0, 30.0), FRONT, prior="photo", reference=second)
+    assert joint.warning().startswith("second photo: poor fit: "), joint.warning()
+
+
+def test_transparent_texels_inside_the_circle_are_left_out_or_refused():
+    picture = ball_picture(LIGHT, 96, 96, (48.0, 48.0, 30.0), FRONT)
+    y, x = np.mgrid[0:96, 0:96] + 0.5
+    opaque = (x - 48.0) ** 2 + (y - 48.0) ** 2 <= 31.0**2
+    plain = fit_photo(picture, (48.0, 48.0, 30.0), FRONT, prior="none")
+    cut = fit_photo(picture, (48.0, 48.0, 30.0), FRONT, prior="none", opaque=opaque)
+    assert cut.used == plain.used and np.allclose(cut.coefficients, plain.coefficients)
+    with pytest.raises(PhotoError, match=r"pixels inside the circle are transparent"):
+        fit_photo(picture, (48.0, 48.0, 40.0), FRONT, prior="none", opaque=opaque)

@@ -5,7 +5,8 @@ Cycles: the world's diffuse ray visibility is switched off (glossy and transmiss
 it). EEVEE ignores ray visibility and lights with one capture of the world shader (made with
 "Is Camera Ray" 0), so a World Output of target EEVEE with Mix(nothing, the world, Is Camera
 Ray) is added: the camera sees the world, the capture black. The old visibility and the added
-nodes are recorded in ``WORLD_MARKER`` / ``NODE_MARKER``; ``restore`` puts them back.
+nodes are recorded in ``WORLD_MARKER`` / ``NODE_MARKER``; ``restore`` puts them back and
+deletes only nodes both marked and named in the record (a user's duplicate copies the mark).
 Details: docs/modules.md.
 """
 
@@ -128,12 +129,18 @@ def _record(world):
     return record
 
 
+def _ours(node, record):
+    """Whether ``node`` is one ``prepare`` added: marked, and named in the world's record (a
+    user's duplicate, which copies the mark, has another name)."""
+    return NODE_MARKER in node and node.name in record["nodes"]
+
+
 def _remove_nodes(world, record):
-    """Delete the nodes ``prepare`` added (by their mark, whatever their names now)."""
+    """Delete the nodes ``prepare`` added (``_ours``: never a user's copy of one)."""
     if world.node_tree is None:
         return
     tree = world.node_tree
-    for node in [node for node in tree.nodes if NODE_MARKER in node]:
+    for node in [node for node in tree.nodes if _ours(node, record)]:
         tree.nodes.remove(node)
 
 

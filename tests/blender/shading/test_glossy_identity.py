@@ -9,7 +9,7 @@ import pytest
 
 from benchmarks.shadow_scene import ShadowScene, principled_material
 from sh_lighting import api
-from sh_lighting.blender.shading import glossy, materials, notes
+from sh_lighting.blender.shading import glossy, materials, notes, world_diffuse
 
 pytestmark = pytest.mark.blender
 
@@ -112,3 +112,19 @@ def test_apply_says_when_a_material_shown_in_another_scene_switches_its_reflecti
     lines = notes.shared_scene_notes(other, result.changed)
     assert any(f"scene '{s.scene.name}'" in line and "EEVEE" in line and "'World B'" in line
                and f"'{s.world.name}'" in line for line in lines), lines
+
+
+def test_remove_leaves_a_users_copy_of_the_worlds_eevee_nodes(applied):
+    """The world's EEVEE nodes Apply added are deleted by the names its record holds: a
+    user's duplicate (Shift+D copies the node's custom property) stays, and so does a World
+    Output of theirs made that way (not taken for ours)."""
+    s = applied
+    tree = s.world.node_tree
+    ours = [n for n in tree.nodes if world_diffuse.NODE_MARKER in n]
+    assert len(ours) == 3
+    copy = tree.nodes.new("ShaderNodeLightPath")  # what Shift+D of ours makes
+    copy[world_diffuse.NODE_MARKER] = True
+    name = copy.name
+    materials.remove_from_materials(s.mats)
+    assert [n.name for n in tree.nodes if world_diffuse.NODE_MARKER in n] == [name]
+    assert not world_diffuse.is_prepared(s.world)
