@@ -51,13 +51,23 @@ class SkipMaterial(Exception):
 
 
 def added_nodes(material):
-    """The group nodes this module added to ``material`` (normally zero or one)."""
+    """The group nodes this module added to ``material`` (normally zero or one): marked, and
+    named in their own record (a user's Shift+D copy, which copies the mark, has another
+    name; a record of an older version names no node)."""
     tree = getattr(material, "node_tree", None)
     if tree is None:
         return []
     return [
         node for node in tree.nodes if node.bl_idname == "ShaderNodeGroup" and NODE_MARKER in node
+        and _recorded_name(node) in (None, node.name)
     ]
+
+
+def _recorded_name(node):
+    try:
+        return json.loads(node[NODE_MARKER]).get("node")
+    except (ValueError, TypeError, AttributeError):
+        return None
 
 
 def is_applied(material):
@@ -302,6 +312,7 @@ def _apply(material, plan, group, mode, maps=lambda: None):
         node.width = GROUP_NODE_WIDTH
         node.location = (plan.active.location.x - GROUP_NODE_WIDTH - 60.0,
                          plan.active.location.y + 220.0)
+        record["node"] = node.name  # its identity: a copy of it has another name
         node[NODE_MARKER] = json.dumps(record)
         builder = keep_bsdf.Builder(material, added, held)
         albedo = keep_bsdf.albedo(material, plan.leaves, mode == "KEEP_BSDF", added, held,

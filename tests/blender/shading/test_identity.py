@@ -1,7 +1,8 @@
-"""The reflection maps (``shading.glossy``) are the add-on's by identity: they follow their
-world through a rename and a new image, Remove deletes only what the add-on made (never a
-user's copy, which inherits the images' custom properties), a copied world gets its own, and
-Apply says when a material shown in another scene now reflects this scene's world there."""
+"""What Apply makes is the add-on's by identity, never by a mark a copy inherits: the
+reflection maps (``shading.glossy``) follow their world through a rename and a new image, a
+copied world gets its own; Remove deletes only what the add-on made (never a user's copy of a
+map, of the world's EEVEE nodes or of the SH node); Apply says when a material shown in
+another scene now reflects this scene's world there."""
 
 import bpy
 import numpy as np
@@ -128,3 +129,17 @@ def test_remove_leaves_a_users_copy_of_the_worlds_eevee_nodes(applied):
     materials.remove_from_materials(s.mats)
     assert [n.name for n in tree.nodes if world_diffuse.NODE_MARKER in n] == [name]
     assert not world_diffuse.is_prepared(s.world)
+
+
+def test_remove_leaves_a_users_copy_of_the_sh_node(applied):
+    """A Shift+D copy of the SH Irradiance node (its record, a custom property, copied) is the
+    user's: Remove restores the material and deletes Apply's node, never the copy."""
+    s = applied
+    material = s.plane.data.materials[0]
+    (ours,) = materials.added_nodes(material)
+    copy = material.node_tree.nodes.new("ShaderNodeGroup")
+    copy.node_tree = ours.node_tree
+    copy[materials.NODE_MARKER] = ours[materials.NODE_MARKER]
+    assert materials.added_nodes(material) == [ours]
+    materials.remove_from_materials(s.mats)
+    assert copy.name in material.node_tree.nodes and not materials.is_applied(material)
