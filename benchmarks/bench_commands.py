@@ -31,7 +31,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 FRAGMENT = HERE / "fragments" / "commands.md"
 WIDTHS = (1024, 4096, 8192, 16384)
-REPEATS = 2
+REPEATS = 3  # 2 at 16K (each of its processes takes about 20 s)
 COMMANDS = {  # name: the arguments after ``python -m sh_lighting`` ({map}, {out}, {blend})
     "compute json": ["compute", "{map}", "--out", "{out}.json"],
     "compute threejs": ["compute", "{map}", "--out", "{out}.three.json", "--format", "threejs"],
@@ -108,7 +108,7 @@ def run(max_width, folder):
         subprocess.run([sys.executable, "-m", "benchmarks.bench_sizes", "--write", str(path),
                         str(width)], cwd=ROOT, env=env, check=True, capture_output=True)
         times = {}
-        for repeat in range(REPEATS):
+        for repeat in range(REPEATS if width < 16384 else 2):
             seconds, rss, out = timed([sys.executable, "-m", "benchmarks.bench_commands",
                                        "--baseline", str(path)], env)
             inside = json.loads(out.strip().splitlines()[-1])
@@ -125,9 +125,23 @@ def run(max_width, folder):
                 f"{n} {t[-1]['time']:.2f} s" for n, t in times.items()), flush=True)
         path.unlink()
         best = {name: min(runs, key=lambda r: r["time"]) for name, runs in times.items()}
+        # each run against its own baseline (the load of a shared machine drifts): medians
+        paired = {name: {
+            "base": _median([r["time"] / b["time"] for r, b in zip(runs, times["baseline"])]),
+            "d+r": _median([r["time"] / b["decode_readback"]
+                            for r, b in zip(runs, times["baseline"])]),
+            "compute": _median([r["time"] / c["time"]
+                                for r, c in zip(runs, times["compute json"])]),
+        } for name, runs in times.items()}
         rows.append({"width": width, "height": width // 2, "image": width * width // 2 * 16,
-                     "best": best, "runs": times})
+                     "best": best, "paired": paired, "runs": times})
     return rows
+
+
+def _median(values):
+    values = sorted(values)
+    middle = len(values) // 2
+    return values[middle] if len(values) % 2 else 0.5 * (values[middle - 1] + values[middle])
 
 
 def fragment(rows, load):
@@ -136,11 +150,13 @@ def fragment(rows, load):
         f"`python -m benchmarks.bench_commands` ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
         f"load average {load}; 2 shared cores, CPU only). Each command as a user runs it "
         "(`python -m sh_lighting ...`) in a fresh process, on a 32-bit float ZIP EXR of the "
-        f"size given, {REPEATS} runs in alternation with a baseline process (import bpy, "
-        "Blender's decode of the same file and the readback of its pixels); the minimum time "
-        "of each. Peak: the process's own peak RSS (`os.wait4`), against the decoded image "
-        "(H × W × 4 float32). d+r: decode + readback as timed inside the baseline process; "
-        "base: the baseline process's wall time (it starts Python and bpy as a command does).",
+        f"size given, {REPEATS} runs (2 at 16K) in alternation with a baseline process "
+        "(import bpy, Blender's decode of the same file and the readback of its pixels). Time: "
+        "the minimum of each; the ratios are the medians of each run against the same run's "
+        "baseline (or compute), which the machine's load, drifting, affects less. Peak: the "
+        "process's own peak RSS (`os.wait4`), against the decoded image (H × W × 4 float32). "
+        "d+r: decode + readback as timed inside the baseline process; base: the baseline "
+        "process's wall time (it starts Python and bpy as a command does).",
         "", f"Goals: {GOALS}.", "",
         "| size | what | time s | × d+r | × base | × compute | peak MB | × image |",
         "|---|---|---|---|---|---|---|---|"]
@@ -153,22 +169,21 @@ def fragment(rows, load):
                      f"{base['time'] / floor:.2f} | 1.00 | | {base['rss'] / 2**20:.0f} | "
                      f"{base['rss'] / image:.2f} |")
         for name in COMMANDS:
-            r = best[name]
-            lines.append(f"| {size} | {name} | {r['time']:.2f} | {r['time'] / floor:.2f} | "
-                         f"{r['time'] / base['time']:.2f} | {r['time'] / compute:.2f} | "
+            r, q = best[name], row["paired"][name]
+            lines.append(f"| {size} | {name} | {r['time']:.2f} | {q['d+r']:.2f} | "
+                         f"{q['base']:.2f} | {q['compute']:.2f} | "
                          f"{r['rss'] / 2**20:.0f} | {r['rss'] / image:.2f} |")
     lines += ["", "What it means:", ""]
     for row in rows:
-        best, image = row["best"], row["image"]
-        floor = best["baseline"]["decode_readback"]
+        best, image, q = row["best"], row["image"], row["paired"]
         compute = best["compute json"]
         lines.append(
             f"- {row['width']}×{row['height']}: compute {compute['time']:.2f} s = "
-            f"{compute['time'] / floor:.2f}× decode + readback "
-            f"({compute['time'] / best['baseline']['time']:.2f}× the baseline process), peak "
+            f"{q['compute json']['d+r']:.2f}× decode + readback "
+            f"({q['compute json']['base']:.2f}× the baseline process), peak "
             f"{compute['rss'] / image:.2f}× the image; gltf "
-            f"{best['compute gltf']['time'] / compute['time']:.2f}× compute; --lights 2 "
-            f"{best['compute --lights 2']['time'] / compute['time']:.2f}× compute.")
+            f"{q['compute gltf']['compute']:.2f}× compute; --lights 2 "
+            f"{q['compute --lights 2']['compute']:.2f}× compute.")
     return "\n".join(lines) + "\n"
 
 
