@@ -121,6 +121,16 @@ def diffuse_leaves(output):
     return diffuse, None
 
 
+def reflects_only(output):
+    """True when ``output``'s surface has no diffuse part but a Principled BSDF (a metal, a
+    glass): Keep BSDF adds no SH diffuse term to it, yet it reflects the world."""
+    leaves, reason = diffuse_leaves(output)
+    if reason is None or not reason.startswith("no diffuse base colour"):
+        return False
+    return any(leaf.node.bl_idname == "ShaderNodeBsdfPrincipled"
+               for leaf in surface_leaves(output))
+
+
 def no_diffuse_reason(active):
     """Why what Material Output ``active`` renders has no readable diffuse part, or None."""
     return diffuse_leaves(active)[1]

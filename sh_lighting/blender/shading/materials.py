@@ -5,8 +5,9 @@ Its Emission is the surface's diffuse albedo × E(n)/π (eq. 13 of Ramamoorthi a
 away (``world_diffuse``; EEVEE's reflections come back from ``glossy``'s maps); "EMISSION"
 drives the Surface with it alone. The replaced links and settings are recorded in the added
 node's ``NODE_MARKER`` property and ``remove_from_materials`` restores them. Materials without
-a readable diffuse part are skipped with the reason; errors roll back. Details:
-docs/modules.md.
+a readable diffuse part are skipped with the reason, except a Principled BSDF that only
+reflects (Metallic 1.0): it gets a black Albedo and, in EEVEE, the world's reflections back.
+Errors roll back. Details: docs/modules.md.
 """
 
 import functools
@@ -18,7 +19,7 @@ import bpy
 from ...choices import APPLY_MODES
 from ..data import compat
 from . import glossy, keep_bsdf, world_diffuse
-from .diffuse_weight import diffuse_leaves, linked_socket, surface_leaves
+from .diffuse_weight import diffuse_leaves, linked_socket, reflects_only, surface_leaves
 from .nodes import GROUP_NAME, ensure_node_group
 
 # Custom property of the added group node: JSON {"version": 2, "mode": ..., "outputs": [...],
@@ -184,7 +185,7 @@ def _apply_one(material, group, mode, maps=lambda: None):
         except SkipMaterial as error:
             raise SkipMaterial(f"SH lighting is already applied and {error}") from None
     try:
-        plan = _plan(material)
+        plan = _plan(material, mode)
     except SkipMaterial as error:
         if refreshed:
             raise SkipMaterial(f"SH lighting removed, not re-applied: {error}") from None
@@ -250,7 +251,7 @@ class _Plan(NamedTuple):
     surface: list  # diffuse_weight.Leaf of every shader of the surface (for its reflections)
 
 
-def _plan(material):
+def _plan(material, mode=DEFAULT_MODE):
     """Check ``material`` and find what to link, without changing anything."""
     tree = material.node_tree
     outputs = [node for node in tree.nodes if node.bl_idname == "ShaderNodeOutputMaterial"]
@@ -258,11 +259,13 @@ def _plan(material):
         raise SkipMaterial("no Material Output node")
     active = next((node for node in outputs if node.is_active_output), outputs[0])
     leaves, reason = diffuse_leaves(active)
-    if reason is not None:
+    if reason is not None and not (mode == "KEEP_BSDF" and reflects_only(active)):
         raise SkipMaterial(reason)
+    surface = surface_leaves(active)
+    first = (leaves or [leaf for leaf in surface
+                        if leaf.node.bl_idname in BASE_COLOUR_INPUTS])[0].node
     return _Plan(outputs=outputs, active=active, leaves=leaves,
-                 normal=linked_socket(leaves[0].node.inputs.get("Normal")),
-                 surface=surface_leaves(active))
+                 normal=linked_socket(first.inputs.get("Normal")), surface=surface)
 
 
 def surface_shaders(material):
@@ -315,9 +318,12 @@ def _apply(material, plan, group, mode, maps=lambda: None):
         record["node"] = node.name  # its identity: a copy of it has another name
         node[NODE_MARKER] = json.dumps(record)
         builder = keep_bsdf.Builder(material, added, held)
-        albedo = keep_bsdf.albedo(material, plan.leaves, mode == "KEEP_BSDF", added, held,
-                                  builder)
-        tree.links.new(albedo, node.inputs["Albedo"])
+        if plan.leaves:
+            albedo = keep_bsdf.albedo(material, plan.leaves, mode == "KEEP_BSDF", added,
+                                      held, builder)
+            tree.links.new(albedo, node.inputs["Albedo"])
+        else:  # reflects only (a metal): no diffuse part for the SH term to light
+            node.inputs["Albedo"].default_value = (0.0, 0.0, 0.0, 1.0)
         if plan.normal is not None:
             tree.links.new(plan.normal, node.inputs["Normal"])
         for output in plan.outputs:
