@@ -18,3 +18,18 @@ def compute_from_world(scene, capture_width=None, error_normals=0, nonfinite="ra
     if reflected:  # the prefiltered reflections of an applied Keep BSDF follow, same read
         glossy.follow_world(scene, info.radiance)
     return stored, info
+
+
+def take_lights_back(scene):
+    """Remove's part once no material is lit by SH: the lights Extract Lights made deleted and
+    the whole world in the SH again (Compute from World; if the world cannot be read now, the
+    lights are deleted all the same). Returns the names of the lights deleted ([] when none:
+    nothing else changes)."""
+    names = [obj.name for obj in lights.extracted_lights(scene)]
+    if not names:
+        return []
+    try:
+        compute_from_world(scene)
+    except ValueError:
+        lights.remove_lights(scene)
+    return names

@@ -34,6 +34,11 @@ def bare_objects_note(names, limit=3):
     return f"{len(names)} object(s) have no material ({shown}): give them a material first"
 
 
+def file_materials():
+    """The file's local materials (Remove checks none of them is still lit by SH)."""
+    return [m for m in bpy.data.materials if m.library is None]
+
+
 def _skip_reasons(result, limit=3):
     """Up to ``limit`` "material: reason" strings of a ``materials.Result``."""
     return [f"{name}: {reason}" for name, reason in result.skipped[:limit]]
@@ -232,6 +237,12 @@ class SHLIGHT_OT_remove(bpy.types.Operator):
         if widened:
             message += (f", {len(widened)} of them beyond the selection: the world lights "
                         "diffuse surfaces again, for the whole scene")
+        if not any(materials.is_applied(m) for m in file_materials()):
+            # The world lights everything again: Extract Lights' lamps would light it twice
+            deleted = design_compute.take_lights_back(scene)
+            if deleted:
+                message += (f"; {len(deleted)} extracted light(s) deleted "
+                            f"({', '.join(deleted)}), the SH holds the whole world again")
         self.report({"INFO"}, message)
         return {"FINISHED"}
 
