@@ -18,13 +18,16 @@ class SHLIGHT_OT_extract_lights(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     count: bpy.props.IntProperty(
-        name="Lights", default=3, min=0, max=MAX_COUNT,
-        description="Largest number of lights to extract")
+        name="Lights", default=MAX_COUNT, min=0, max=MAX_COUNT,
+        description="Largest number of lights to extract (with Error Target on, fewer when "
+        "fewer are enough)")
     use_error_target: bpy.props.BoolProperty(
-        name="Error Target", default=False,
-        description="Stop once SH + lights are within the error target of the world")
+        name="Error Target", default=True,
+        description="Stop once SH + lights are within the error target of the world: as many "
+        "lights as the world needs (one sun makes one light)")
     error_target: bpy.props.FloatProperty(
-        name="Target", default=0.5, min=0.01, max=10.0, subtype="PERCENTAGE",
+        name="Target", default=100.0 * lights.ERROR_TARGET, min=0.01, max=10.0,
+        subtype="PERCENTAGE",
         description="Mean error of SH + lights against the world's irradiance, % of its light")
     size_limit: bpy.props.FloatProperty(
         name="Size Limit", default=lights.SIZE_LIMIT, min=0.02, max=2.0 * LARGEST_RADIUS,
