@@ -18,6 +18,7 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ...formats.presets import PresetError
 from ..data import scene_data
+from ..design import lights
 from ..presets import preset_io
 from .polls import coefficients_poll, scene_poll
 
@@ -65,6 +66,12 @@ def load_preset_file(operator, scene, path):
     except (PresetError, OSError, ValueError) as error:
         operator.report({"ERROR"}, f"Preset not loaded, nothing changed: {error}")
         return {"CANCELLED"}
+    # Lamps Extract Lights took out of the old world would light the preset's lighting
+    deleted = lights.remove_lights(scene)
+    if deleted:
+        note = "; ".join(filter(None, (note, (
+            f"{len(deleted)} Sun light(s) extracted from the previous world deleted "
+            f"({', '.join(deleted)}); the world still shows as the background"))))
     operator.report({"INFO"}, f"Loaded SH lighting preset '{loaded_name(path)}'"
                     + (f"; {note}" if note else ""))
     return {"FINISHED"}
