@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from quadrature import random_directions
 
 from sh_lighting.core.irradiance import C1, C2, C4, irradiance, irradiance_matrices
+from sh_lighting.core import minimum
 from sh_lighting.core.minimum import (
     irradiance_maximum,
     irradiance_minimum,
@@ -220,3 +221,30 @@ def test_negative_light_warning_on_nonpositive_mean():
     coeffs = np.zeros((9, 3))
     coeffs[0] = [-1.0, 1.0, 1.0]
     assert "R" in negative_light_warning(coeffs)
+
+
+def test_negative_light_is_said_in_proportion():
+    """How deep and over how much of the sphere: a lone light dips −15.8 % of the mean (not
+    small); the same light over an ambient that leaves a −3 % dip is small, and the warning
+    says so and over what share of directions (counted against a dense lattice)."""
+    lone = delta([0, 0, 1])
+    assert not minimum.negative_light_is_small(lone)
+    lone_share = minimum.negative_share(lone)
+    # E < 0 where 15x² + 16x + 3 < 0, x = cos θ in (−0.8239, −0.2427): a band of area share
+    # (0.8239 − 0.2427)/2 = 0.2906
+    assert lone_share == pytest.approx(0.2906, abs=0.002)
+    assert "29.1 % of all directions" in negative_light_warning(lone)
+    assert "smoothing window removes it" in negative_light_warning(lone)
+    # ambient a: E_min = −19/480 + a, mean 1/4 + a; −3 % of the mean
+    a = (19 / 480 - 0.03 * 0.25) / 1.03
+    dipped = lone.copy()
+    dipped[0] += a / (pi * 0.5 / sqrt(pi))  # L00 → E += π · L00 · Y00 = L00 √π / 2
+    relative = minimum.irradiance_minimum(dipped).value / minimum.mean_irradiance(dipped)
+    assert relative == pytest.approx(-0.03, abs=1e-9)
+    assert minimum.negative_light_is_small(dipped)
+    message = negative_light_warning(dipped)
+    assert "-3.0 %" in message and "a small dip" in message
+    assert 0.0 < minimum.negative_share(dipped) < lone_share
+    constant = np.zeros((9, 3))
+    constant[0] = 1.0
+    assert not minimum.negative_light_is_small(constant) and minimum.negative_share(constant) == 0

@@ -12,7 +12,8 @@ import textwrap
 import bpy
 
 from ...core.edits import describe_coefficients
-from ...core.minimum import negative_light_warning
+from ...core.minimum import (
+    irradiance_minimum, mean_irradiance, negative_light_is_small, negative_light_warning)
 from ...core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
 from ..data import scene_data
 from ..design import edits
@@ -79,6 +80,18 @@ def world_kind(context):
     return "procedural" if isinstance(source, reader.ProceduralSource) else "image"
 
 
+def negative_light_line(coeffs):
+    """The button under the sphere when the irradiance dips below zero, with how deep (its
+    minimum, % of the mean; the tooltip says where and over how much of the sphere)."""
+    mean = mean_irradiance(coeffs)
+    if (mean <= 0.0).any():
+        return "Negative light: smooth it"
+    depth = 100.0 * float((irradiance_minimum(coeffs).value / mean).min())
+    if negative_light_is_small(coeffs):
+        return f"Slight negative light ({depth:.1f} %)"
+    return f"Negative light ({depth:.0f} %): smooth it"
+
+
 def sphere_caption(stops):
     """The line under the sphere: what it is and how it is exposed."""
     return f"White sphere, peak shown white ({stops:+.1f} EV)"
@@ -101,8 +114,10 @@ def draw_sphere(layout, context, coeffs):
     # the line says by how much, so a brighter lighting reads as a lower exposure.
     row = col.row()
     if negative_light_warning(coeffs):
-        row.alert = True
-        op = row.operator("shlight.window", text="Negative light: smooth it", icon="ERROR")
+        text = negative_light_line(coeffs)
+        small = negative_light_is_small(coeffs)
+        row.alert = not small  # a small dip is said quietly (core.minimum.SMALL_NEGATIVE)
+        op = row.operator("shlight.window", text=text, icon="INFO" if small else "ERROR")
         op.kind = "MINIMAL"
     else:
         row.alignment = "CENTER"
