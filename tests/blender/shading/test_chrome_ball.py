@@ -83,8 +83,8 @@ def test_chrome_ball_in_emission_only_is_still_skipped(chrome):
 
 @pytest.mark.slow
 def test_chrome_ball_is_not_black_in_eevee(chrome):
-    """One tiny EEVEE render after the default Apply: the ball reflects the world (mean
-    brightness within 30 % of path tracing; skipped, it rendered black)."""
+    """One tiny EEVEE render after the default Apply: the ball reflects the world (measured:
+    brightness 1.057, mean |error| 8.2 % of path tracing; skipped, it rendered black)."""
     s = chrome
     s.scene.eevee.taa_render_samples = 1
     assert bpy.ops.shlight.apply() == {"FINISHED"}
@@ -92,4 +92,4 @@ def test_chrome_ball_is_not_black_in_eevee(chrome):
     _, image = s.render()
     error, ratio = _compare(s, image)
     print(f"\nchrome ball, EEVEE: mean |error| {error:.4f}, brightness {ratio:.4f}")
-    assert abs(ratio - 1) < 0.3
+    assert abs(ratio - 1) < 0.15 and error < 0.15
