@@ -109,8 +109,9 @@ def check_circle(circle, height, width, min_radius):
         raise PhotoError(f"the circle ({cx}, {cy}, {r}) has a value that is not a number")
     if r < min_radius:
         raise PhotoError(
-            f"the ball's radius is {r:g} px: at least {min_radius:g} px are needed to fit nine "
-            "terms; use a photo where the ball is larger, or a tighter crop"
+            f"the circle's radius is {r:g} px: at least {min_radius:g} px are needed to fit "
+            "nine terms; check the circle's radius (in pixels), or for a ball that small in "
+            "the photo, a photo where it is larger"
         )
     if cx + r <= 0.0 or cy + r <= 0.0 or cx - r >= width or cy - r >= height:
         raise PhotoError(

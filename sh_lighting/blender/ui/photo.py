@@ -3,16 +3,27 @@ in the Image Editor (Image > Match Photo: Drag the Ball's Circle) that gives the
 
 The settings are the operator's own properties (Blender remembers the last ones used in the
 session): nothing transient is stored in the scene; what was fitted is recorded in the
-stored coefficients' provenance ("PHOTO").
+stored coefficients' provenance ("PHOTO"). Choosing the photo finds the ball in it
+(``core.ball_detect``, a suggestion) and the dialog shows the photo with that circle, which
+the user accepts or corrects. Blender remembers an operator's settings only when it
+succeeds: after a failure the photo and circle typed are kept on the window manager
+(``TYPED``, not in the scene) for the next dialog.
 """
+
+import os
 
 import bpy
 
+from ...core.ball_detect import detect_ball
 from ...core.photo import DEFAULT_ALBEDO, DEFAULT_MARGIN, PRIORS
 from ..photo import fit
 from ..data import scene_data
+from . import previews
 from .panels import sub_panels
 from .polls import scene_poll
+
+TYPED = "sh_lighting_match_photo_typed"  # WindowManager: {"filepath", "circle"} of a failure
+PHOTO_SCALE = 8.0  # the dialog's photo: UI units (160 px at scale 1)
 
 PRIOR_ITEMS = (
     ("mirror", "Mirror", "The unseen side is the seen side mirrored through the plane "
@@ -38,6 +49,82 @@ PROJECTION_ITEMS = (
 )
 
 
+def find_ball(props):
+    """Find the ball in ``props.filepath``'s photo: its circle into ``props.circle`` and a line
+    saying what was found (or why nothing) into ``props.detected``; the dialog's thumbnail
+    made. Nothing raised: a photo that cannot be read says so in the line."""
+    path = props.filepath
+    if not path:
+        props.detected = ""
+        return
+    try:
+        source = fit.read_photo(path)
+    except ValueError as error:
+        props.detected = f"! {error}"
+        return
+    try:
+        previews.photo(path, source.pixels, (0.0, 0.0, 0.0))
+    except RuntimeError:  # the add-on's previews are not open (not registered)
+        pass
+    guess = detect_ball(source.pixels)
+    if guess is None:
+        props.detected = (f"! No ball found in '{os.path.basename(source.path)}': type its "
+                          "circle, or drag it (Image Editor > Image > Match Photo)")
+        return
+    props.circle = guess.circle
+    props.detected = guess.summary()[0].upper() + guess.summary()[1:]
+
+
+def find_ball_keeping_circle(props):
+    """The thumbnail and the line for a photo given with its circle (the Image Editor's drag
+    or detection): the circle kept as given."""
+    circle = tuple(props.circle)
+    find_ball(props)
+    if tuple(props.circle) != circle:
+        props.circle = circle
+        props.detected = "Circle as given (centre X, Y and radius in pixels)"
+
+
+def _photo_chosen(self, _context):
+    find_ball(self)
+
+
+def _match(self, context):
+    """Match Photo's work: the scene's coefficients from the photo; the operator result."""
+    if not self.filepath:
+        self.report({"ERROR"}, "No photo: give the path of the grey ball's photo")
+        return {"CANCELLED"}
+    if self.circle[2] <= 0.0:
+        self.report({"ERROR"}, "Match Photo: no circle yet (its radius is 0 px): the "
+                    "ball was not found in the photo; type its centre X, Y and radius in "
+                    "pixels, or drag it (Image Editor > Image > Match Photo)")
+        return {"CANCELLED"}
+    direction = tuple(self.direction) if self.camera == "DIRECTION" else None
+    chrome = self.chrome_filepath or None
+    second = (fit.SecondPhoto(self.second_filepath, tuple(self.second_circle),
+                              direction=tuple(self.second_direction),
+                              roll=self.second_roll)
+              if self.prior == "photo" and self.second_filepath else None)
+    try:
+        stored, result = fit.coefficients_from_photo(
+            context.scene, self.filepath, tuple(self.circle), direction=direction,
+            roll=self.roll, projection=self.projection, focal_mm=self.focal_mm,
+            sensor_mm=self.sensor_mm, albedo=self.albedo, margin=self.margin,
+            prior=self.prior, clip=self.clip if self.clip > 0.0 else None,
+            chrome=chrome, second=second)
+    except (LookupError, ValueError) as error:
+        self.report({"ERROR"}, f"Match Photo: {error}")
+        return {"CANCELLED"}
+    warning = result.warning()  # first: a wrong circle reads as a poor fit
+    kind = {"WARNING"} if warning else {"INFO"}
+    first = f"Match Photo: {warning}; " if warning else ""
+    exposure = scene_data.provenance(context.scene).get("exposure_summary")
+    both = f"; {exposure}" if exposure else ""
+    keyed = f"; SH lighting {stored.note}" if getattr(stored, "note", "") else ""
+    self.report(kind, f"{first}SH lighting from the photo: {result.summary()}{both}{keyed}")
+    return {"FINISHED"}
+
+
 class SHLIGHT_OT_match_photo(bpy.types.Operator):
     """Compute the SH lighting from a photo of a grey (matte) ball: the nine coefficients
     that best reproduce the ball's pixels, the unseen side filled by the chosen prior"""
@@ -47,8 +134,12 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     filepath: bpy.props.StringProperty(
-        name="Photo", subtype="FILE_PATH",
-        description="The photo of the grey ball (8-bit sRGB PNG or JPEG, or linear EXR/HDR)")
+        name="Photo", subtype="FILE_PATH", update=_photo_chosen,
+        description="The photo of the grey ball (8-bit sRGB PNG or JPEG, or linear EXR/HDR); "
+                    "choosing it finds the ball")
+    detected: bpy.props.StringProperty(
+        name="Found", options={"HIDDEN", "SKIP_SAVE"},
+        description="What finding the ball in the photo gave")
     circle: bpy.props.FloatVectorProperty(
         name="Circle", size=3, default=(0.0, 0.0, 0.0), min=0.0, soft_max=8192.0,
         description="The ball in the photo: centre X and Y (pixels from the top-left "
@@ -108,12 +199,39 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
         return scene_poll(cls, context)
 
     def invoke(self, context, event):
+        typed = context.window_manager.get(TYPED)
+        if typed is not None:  # what the last, failed, dialog was given
+            typed = typed.to_dict()  # a copy: the property is deleted next
+            del context.window_manager[TYPED]
+            if not self.properties.is_property_set("filepath"):
+                self.filepath = str(typed.get("filepath", ""))  # finds the ball again
+                circle = tuple(typed.get("circle", (0.0, 0.0, 0.0)))
+                if len(circle) == 3 and circle[2] > 0.0:  # a circle typed wins over the found
+                    self.circle = circle
+        elif self.filepath and not self.properties.is_property_set("circle"):
+            find_ball(self)
+        elif self.filepath:
+            find_ball_keeping_circle(self)
         return context.window_manager.invoke_props_dialog(self, width=360)
 
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
         layout.prop(self, "filepath")
+        if self.detected:
+            failed = self.detected.startswith("! ")
+            row = layout.row()
+            row.alert = failed
+            row.label(text=self.detected[2:] if failed else self.detected,
+                      icon="ERROR" if failed else "CHECKMARK")
+        try:
+            preview = previews.photo(self.filepath, None, tuple(self.circle))
+        except RuntimeError:
+            preview = None
+        if preview is not None:
+            row = layout.row()
+            row.alignment = "CENTER"
+            row.template_icon(icon_value=preview.icon_id, scale=PHOTO_SCALE)
         layout.prop(self, "circle")
         layout.prop(self, "albedo")
         layout.prop(self, "margin")
@@ -134,33 +252,13 @@ class SHLIGHT_OT_match_photo(bpy.types.Operator):
                 layout.prop(self, "sensor_mm")
 
     def execute(self, context):
-        if not self.filepath:
-            self.report({"ERROR"}, "No photo: give the path of the grey ball's photo")
-            return {"CANCELLED"}
-        direction = tuple(self.direction) if self.camera == "DIRECTION" else None
-        chrome = self.chrome_filepath or None
-        second = (fit.SecondPhoto(self.second_filepath, tuple(self.second_circle),
-                                    direction=tuple(self.second_direction),
-                                    roll=self.second_roll)
-                  if self.prior == "photo" and self.second_filepath else None)
-        try:
-            stored, result = fit.coefficients_from_photo(
-                context.scene, self.filepath, tuple(self.circle), direction=direction,
-                roll=self.roll, projection=self.projection, focal_mm=self.focal_mm,
-                sensor_mm=self.sensor_mm, albedo=self.albedo, margin=self.margin,
-                prior=self.prior, clip=self.clip if self.clip > 0.0 else None,
-                chrome=chrome, second=second)
-        except (LookupError, ValueError) as error:
-            self.report({"ERROR"}, f"Match Photo: {error}")
-            return {"CANCELLED"}
-        warning = result.warning()  # first: a wrong circle reads as a poor fit
-        kind = {"WARNING"} if warning else {"INFO"}
-        first = f"Match Photo: {warning}; " if warning else ""
-        exposure = scene_data.provenance(context.scene).get("exposure_summary")
-        both = f"; {exposure}" if exposure else ""
-        keyed = f"; SH lighting {stored.note}" if getattr(stored, "note", "") else ""
-        self.report(kind, f"{first}SH lighting from the photo: {result.summary()}{both}{keyed}")
-        return {"FINISHED"}
+        result = _match(self, context)
+        wm = context.window_manager
+        if result == {"CANCELLED"} and wm is not None:
+            wm[TYPED] = {"filepath": self.filepath, "circle": list(self.circle)}
+        elif wm is not None and TYPED in wm:
+            del wm[TYPED]
+        return result
 
 
 def circle_from_drag(size, start_uv, end_uv):

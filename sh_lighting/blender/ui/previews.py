@@ -22,11 +22,14 @@ IRRADIANCE_SIZE = 128
 BASIS_NAMES = tuple(f"basis_{k}" for k in range(9))
 IRRADIANCE_NAME = "irradiance"
 SWATCH_SIZE = 16
+PHOTO_SIZE = 160  # the Match Photo dialog's thumbnail: its longer side, px
+PHOTO_NAME = "photo"
+RING = (1.0, 0.25, 0.1)  # the circle drawn on it
 
 # Blender's previews live in a collection that the add-on must hold from register() to
 # unregister() (bpy.utils.previews), so the module keeps that one reference; what the
-# collection's images were drawn from (``signature``, ``stops``, ``swatches``) are attributes
-# of the collection itself and go with it.
+# collection's images were drawn from (``signature``, ``stops``, ``swatches``, ``photo``) are
+# attributes of the collection itself and go with it.
 _held = {"collection": None}
 
 
@@ -116,13 +119,56 @@ def swatch(index, rgb):
     return preview
 
 
+def photo_thumbnail(pixels, size=PHOTO_SIZE):
+    """(thumbnail RGBA (h, w, 4) sRGB-encoded, scale in thumbnail px per photo px) of linear
+    ``pixels`` (H, W, 3+), rows top to bottom: every k-th pixel, k making the longer side at
+    most ``size``."""
+    height, width = pixels.shape[:2]
+    step = max(1, -(-max(height, width) // size))
+    small = np.asarray(pixels[::step, ::step, :3], dtype=np.float64)
+    thumb = np.ones((*small.shape[:2], 4))
+    thumb[..., :3] = linear_to_srgb(np.clip(np.nan_to_num(small), 0.0, 1.0))
+    return thumb, 1.0 / step
+
+
+def draw_ring(thumb, scale, circle, width=1.5):
+    """``thumb`` with the circle (cx, cy, r in photo pixels from the top-left corner) drawn
+    on it as a ring of colour ``RING``; a copy."""
+    out = thumb.copy()
+    cx, cy, r = (float(v) * scale for v in circle)
+    if r <= 0.0:
+        return out
+    y, x = np.mgrid[0:out.shape[0], 0:out.shape[1]] + 0.5
+    ring = np.abs(np.hypot(x - cx, y - cy) - r) <= 0.5 * width
+    out[ring, :3] = RING
+    return out
+
+
+def photo(path, pixels, circle):
+    """The ``ImagePreview`` of the photo at ``path`` (its linear ``pixels``, read by the
+    caller only when the path is new: pass None for the one shown) with ``circle`` drawn;
+    None when no photo was given yet."""
+    pcoll = collection()
+    preview = pcoll.get(PHOTO_NAME) or pcoll.new(PHOTO_NAME)
+    held = pcoll.photo
+    if pixels is not None:
+        held = pcoll.photo = (path, *photo_thumbnail(pixels), None)
+    if held is None or held[0] != path:
+        return None
+    key = tuple(round(float(v), 2) for v in circle)
+    if held[3] != key:
+        to_preview(preview, draw_ring(held[1], held[2], circle))
+        pcoll.photo = (*held[:3], key)
+    return preview
+
+
 def register():
     if _held["collection"] is not None:  # registered twice without unregister: start clean
         unregister()
     pcoll = bpy.utils.previews.new()
     for name, image in zip(BASIS_NAMES, basis_sphere_images(BASIS_SIZE), strict=True):
         to_preview(pcoll.new(name), image)
-    pcoll.signature, pcoll.stops, pcoll.swatches = None, 0.0, {}
+    pcoll.signature, pcoll.stops, pcoll.swatches, pcoll.photo = None, 0.0, {}, None
     _held["collection"] = pcoll
 
 
