@@ -34,6 +34,17 @@ def bare_objects_note(names, limit=3):
     return f"{len(names)} object(s) have no material ({shown}): give them a material first"
 
 
+def beyond_selection(context):
+    """The materials Apply will change beyond the selected objects' (Keep BSDF turns the
+    world's diffuse light off for the whole scene, so every material gets SH): [] unless
+    Apply To is Selected and Mode Keep BSDF."""
+    settings = context.scene.sh_lighting
+    if settings.apply_target != "SELECTED" or settings.apply_mode != "KEEP_BSDF":
+        return []
+    chosen = set(materials.materials_of(context.selected_objects or ()))
+    return [m for m in materials.materials_of(context.scene.objects) if m not in chosen]
+
+
 def file_materials():
     """The file's local materials (Remove checks none of them is still lit by SH)."""
     return [m for m in bpy.data.materials if m.library is None]
@@ -149,6 +160,18 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
     @classmethod
     def poll(cls, context):
         return _target_poll(cls, context) and coefficients_poll(cls, context)
+
+    @classmethod
+    def description(cls, context, props):
+        """The docstring, and how many materials beyond the selection Keep BSDF changes."""
+        text = cls.bl_rna.description
+        beyond = beyond_selection(context) if props.mode == "SCENE" else []
+        if beyond:
+            shown = ", ".join(m.name for m in beyond[:3]) + (", ..." if len(beyond) > 3 else "")
+            text += (f".\nKeep BSDF also changes {len(beyond)} material(s) of objects not "
+                     f"selected ({shown}): it turns the world's diffuse light off for the "
+                     "whole scene, so every material there gets the SH light")
+        return text
 
     def execute(self, context):
         scene = context.scene

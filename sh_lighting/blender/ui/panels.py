@@ -17,9 +17,10 @@ from ...core.minimum import (
 from ...core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
 from ..data import scene_data
 from ..design import edits
-from ..shading import notes
+from ..shading import materials, notes
 from ..world import reader
 from . import presets as presets_ui
+from .operators import beyond_selection
 from . import previews
 
 CHANNELS = "RGB"
@@ -28,7 +29,10 @@ SHORT_PHRASES = ("ambient", "±Y", "up/down", "±X", "xy", "yz", "poles", "xz", 
 IRRADIANCE_SCALE = 6.0  # the sphere: 6 UI units (120 px at scale 1)
 CHARACTER_WIDTH = 6.5  # mean width of a UI character in px at scale 1 (Blender's default font)
 CHOICE_LABEL_FACTOR = 0.26  # the label column of Apply To and Mode
-SHOW_CHANNELS = "sh_lighting_show_channels"  # WindowManager: which rows show R, G, B
+SHOW_CHANNELS = "sh_lighting_show_channels"
+# Lines under Apply (read in full in the sidebar: notes.MODE_NOTE_CHARACTERS)
+BEYOND_LINE = "Also {count} material(s) not selected"
+PREVIEW_LINE = "Preview adds its studio light too"  # WindowManager: which rows show R, G, B
 
 
 def wrapped(layout, context, text, icon="NONE"):
@@ -192,6 +196,32 @@ def draw_main(layout, context):
     column = layout.column(align=True)
     for icon, line in notes.status_lines(scene, settings.apply_mode):
         column.label(text=line, icon=icon)
+    beyond = beyond_selection(context)
+    if beyond:
+        column.label(text=BEYOND_LINE.format(count=len(beyond)), icon="INFO")
+    shading = studio_preview(context)
+    if shading is not None:
+        column.label(text=PREVIEW_LINE, icon="ERROR")
+        column.prop(shading, "use_scene_world", text="Preview with the Scene World")
+
+
+def studio_preview(context):
+    """The shading of a 3D Viewport in Material Preview whose studio HDRI lights the scene's
+    SH-lit materials on top of their SH light (it is not the scene's world), or None. The
+    context's own viewport first, else one of the screen's."""
+    scene = context.scene
+    if not any(materials.is_applied(m) for m in materials.materials_of(scene.objects)):
+        return None
+    spaces = [getattr(context, "space_data", None)]
+    screen = getattr(context, "screen", None)
+    for area in getattr(screen, "areas", ()):
+        spaces.extend(space for space in area.spaces if space.type == "VIEW_3D")
+    for space in spaces:
+        shading = getattr(space, "shading", None) if getattr(space, "type", "") == "VIEW_3D" \
+            else None
+        if shading is not None and shading.type == "MATERIAL" and not shading.use_scene_world:
+            return shading
+    return None
 
 
 def draw_presets_header(layout, context):

@@ -1,16 +1,19 @@
 """The panel's words as an artist reads them: the line under the sphere in proportion (a
-small dip below zero is not a red error), ..."""
+small dip below zero is not a red error); under Apply, how many materials beyond the selection
+Keep BSDF changes (said before, not only in the report after) and, in Material Preview, that
+the preview's studio light adds to the SH light; ..."""
 
 from types import SimpleNamespace
 
 import bpy
 import numpy as np
-from blender_scenes import environment_world
+from blender_scenes import environment_world, run_execute
 from ui_layout import RecordingLayout
 
-from sh_lighting.blender.data import scene_data
+from sh_lighting.blender.data import compat, scene_data
+from sh_lighting.blender.shading import notes
 from sh_lighting.blender.presets import preset_io
-from sh_lighting.blender.ui import design as design_ui, panels, previews
+from sh_lighting.blender.ui import design as design_ui, operators, panels, previews
 from sh_lighting.core.sh import sh_basis
 
 
@@ -50,3 +53,70 @@ def test_a_deep_dip_is_still_an_error(addon, monkeypatch):
     [(_, _, _, kwargs)] = _sphere_line(monkeypatch)
     assert kwargs["text"] == "Negative light (-16 %): smooth it"
     assert kwargs["icon"] == "ERROR" and kwargs["alert"]
+
+
+class ViewContext:
+    """bpy.context with a 3D Viewport of the given shading as its space."""
+
+    def __init__(self, shading_type, use_scene_world=False):
+        self.space_data = SimpleNamespace(type="VIEW_3D", shading=SimpleNamespace(
+            type=shading_type, use_scene_world=use_scene_world))
+
+    def __getattr__(self, name):
+        return getattr(bpy.context, name)
+
+
+def three_objects():
+    """'Lit' (selected), 'Other' and 'Third', each with a material of its own."""
+    scene = bpy.context.scene
+    made = []
+    for name in ("Lit", "Other", "Third"):
+        material = bpy.data.materials.new(name)
+        compat.ensure_node_tree(material)
+        mesh = bpy.data.meshes.new(name)
+        mesh.materials.append(material)
+        obj = bpy.data.objects.new(name, mesh)
+        scene.collection.objects.link(obj)
+        obj.select_set(name == "Lit")
+        made.append(material)
+    scene_data.store(scene, np.eye(9, 3), {"source": "SCRIPT"})
+    return made
+
+
+def test_apply_says_before_how_many_materials_beyond_the_selection_change(addon):
+    """Keep BSDF, Apply To Selected, one of three objects selected: the line under Apply and
+    the button's tooltip say 2 more materials change; Emission Only or Apply To All: no line."""
+    three_objects()
+    layout = RecordingLayout()
+    panels.draw_main(layout, bpy.context)
+    assert ("label", "Also 2 material(s) not selected", "INFO") in layout.calls
+    assert len(panels.BEYOND_LINE.format(count=12)) <= notes.MODE_NOTE_CHARACTERS
+    tooltip = operators.SHLIGHT_OT_apply.description(bpy.context, SimpleNamespace(mode="SCENE"))
+    assert "Keep BSDF also changes 2 material(s) of objects not selected (Other, Third)" in tooltip
+    result, reports = run_execute(operators.SHLIGHT_OT_apply, mode="SCENE")
+    assert "applied to 3 material(s)" in reports[0][1] and "2 of them beyond" in reports[0][1]
+    bpy.context.scene.sh_lighting.apply_mode = "EMISSION"
+    layout = RecordingLayout()
+    panels.draw_main(layout, bpy.context)
+    assert "not selected" not in layout.text()
+    bpy.context.scene.sh_lighting.apply_mode = "KEEP_BSDF"
+    bpy.context.scene.sh_lighting.apply_target = "ALL"
+    assert not operators.beyond_selection(bpy.context)
+
+
+def test_material_preview_says_its_studio_light_adds_to_the_sh(addon):
+    """After Apply, a viewport in Material Preview (its own studio HDRI) gets a line and the
+    switch to preview with the scene's world; with Scene World on, Rendered shading, or
+    nothing applied: none."""
+    three_objects()
+    preview = ViewContext("MATERIAL")
+    assert panels.studio_preview(preview) is None  # nothing applied yet
+    assert bpy.ops.shlight.apply() == {"FINISHED"}
+    layout = RecordingLayout()
+    panels.draw_main(layout, preview)
+    assert ("label", panels.PREVIEW_LINE, "ERROR") in layout.calls
+    assert len(panels.PREVIEW_LINE) <= notes.MODE_NOTE_CHARACTERS
+    [switch] = [c for c in layout.of("prop") if c[2] == "use_scene_world"]
+    assert switch[1] is preview.space_data.shading
+    assert panels.studio_preview(ViewContext("MATERIAL", use_scene_world=True)) is None
+    assert panels.studio_preview(ViewContext("RENDERED")) is None
