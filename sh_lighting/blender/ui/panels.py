@@ -206,11 +206,13 @@ def draw_main(layout, context):
 
 
 def studio_preview(context):
-    """The shading of a 3D Viewport in Material Preview whose studio HDRI lights the scene's
-    SH-lit materials on top of their SH light (it is not the scene's world), or None. The
-    context's own viewport first, else one of the screen's."""
+    """The shading of a 3D Viewport in Material Preview whose studio HDRI lights the BSDFs of
+    the scene's Keep BSDF materials on top of their SH light (it is not the scene's world),
+    or None. The context's own viewport first, else one of the screen's. (Emission Only
+    materials show their SH light alone there.)"""
     scene = context.scene
-    if not any(materials.is_applied(m) for m in materials.materials_of(scene.objects)):
+    if not any(materials.mode_of(m) == "KEEP_BSDF"
+               for m in materials.materials_of(scene.objects)):
         return None
     spaces = [getattr(context, "space_data", None)]
     screen = getattr(context, "screen", None)

@@ -106,11 +106,13 @@ def test_apply_says_before_how_many_materials_beyond_the_selection_change(addon)
 
 def test_material_preview_says_its_studio_light_adds_to_the_sh(addon):
     """After Apply, a viewport in Material Preview (its own studio HDRI) gets a line and the
-    switch to preview with the scene's world; with Scene World on, Rendered shading, or
-    nothing applied: none."""
+    switch to preview with the scene's world; with Scene World on, Rendered shading, nothing
+    applied or Emission Only (its SH light alone): none."""
     three_objects()
     preview = ViewContext("MATERIAL")
     assert panels.studio_preview(preview) is None  # nothing applied yet
+    assert bpy.ops.shlight.apply(mode="EMISSION") == {"FINISHED"}
+    assert panels.studio_preview(preview) is None
     assert bpy.ops.shlight.apply() == {"FINISHED"}
     layout = RecordingLayout()
     panels.draw_main(layout, preview)
