@@ -623,6 +623,7 @@ def session():
           np.allclose(stored_coefficients(S()), 2.0 * before, rtol=1e-5, atol=1e-6))
     xdo("mousemove", *in_viewport())
     yield 0.5
+    yield from rotate_and_undo(before)
     yield from click(sidebar_point(*TARGETS["design_header"]))  # fold Design again
     yield from settle()
     yield from click(sidebar_point(*TARGETS["basis_header"]))  # the basis chart, then fold it
@@ -692,6 +693,43 @@ def session():
     yield from node_editor()
     yield from properties_editor()
     yield from preferences()
+
+
+def last_operator(idname):
+    """The window manager's last registered operator if it is ``idname`` (what Adjust Last
+    Operation redoes), else None."""
+    operators = bpy.context.window_manager.operators
+    return operators[-1] if len(operators) and operators[-1].bl_idname == idname else None
+
+
+def rotate_and_undo(before):
+    """Rotate from the Design panel, Yaw dragged 150 px in its popup (Blender's Rotation
+    fields turn 1° a pixel; the first Rotate turned 3.9°); then one Ctrl+Z undoes the rotate
+    and the next the Exposure before it: one undo step per use of a live popup (its first
+    change used to push a no-op step of its own). ``before``: the values before Exposure."""
+    exposed = stored_coefficients(S())
+    yield from click(sidebar_point(*TARGETS["rotate"]))
+    yield from settle(1.0)
+    shot("rotate_popup")
+    mx, my = mouse()
+    yield from drag((mx + TARGETS["popup_field"][0], my + TARGETS["popup_field"][1]), 150)
+    yield from settle(1.0)
+    last = last_operator("SHLIGHT_OT_rotate")
+    yaw = math.degrees(last.properties.yaw) if last is not None else None
+    turned = not np.allclose(stored_coefficients(S()), exposed, rtol=1e-5, atol=1e-6)
+    check("Rotate: a 150 px drag on Yaw turns the lighting by about 150°",
+          yaw is not None and 75.0 <= abs(yaw) <= 300.0 and turned,
+          yaw_degrees=None if yaw is None else round(yaw, 1), changed=turned)
+    xdo("mousemove", *in_viewport())
+    yield 0.5
+    key("ctrl+z")
+    yield from settle(1.0)
+    one = np.allclose(stored_coefficients(S()), exposed, rtol=1e-5, atol=1e-6)
+    key("ctrl+z")
+    yield from settle(1.0)
+    two = np.allclose(stored_coefficients(S()), before, rtol=1e-5, atol=1e-6)
+    check("One Ctrl+Z undoes the rotate, the next the exposure", one and two,
+          after_one=one, after_two=two)
 
 
 def addon_module(name):
@@ -896,6 +934,7 @@ TARGETS = {  # (dx, dy) inside the sidebar (291 px wide), from the calibration p
     "channel_g": 44,
     "design_header": (60, 570),
     "exposure": (75, 621),
+    "rotate": (75, 600),
     "basis_header": (60, 596),
 "presets": (222, 16),
     "preset_entry": (220, 139),  # Grace Cathedral, the 5th shipped preset

@@ -41,6 +41,8 @@ CHECKS = (
     "Preset loaded: viewport follows",
     "Undo restores the values before the preset",
     "Exposure +1 stop doubles the lighting",
+    "Rotate: a 150 px drag on Yaw turns the lighting by about 150°",
+    "One Ctrl+Z undoes the rotate, the next the exposure",
     "I over the L10 strength inserts a keyframe",
     "frame 6 lies between the two keys",
     "Frame 6 between keyframes: viewport follows",

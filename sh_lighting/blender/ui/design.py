@@ -3,9 +3,11 @@ take lights out of the world (Extract Lights, ``ui.lights``), see the basis.
 
 Operators (all undoable, with polls that say why they are disabled) hand plain values to
 ``design`` and turn its errors into an ERROR report with nothing changed. Rotate, Exposure,
-Saturation and Band Gains open a live popup: every change of a value redoes the edit at once
-(undo and execute, as the redo panel does), and F9 / Adjust Last Operation changes it again
-afterwards. The "Design" sub-panel holds the buttons; the "Basis Functions" sub-panel (closed
+Saturation and Band Gains run at once with values that change nothing (``IDENTITY``; the
+values are not remembered from the last use) and open Blender's Adjust Last Operation popup
+(F9): every change of a value redoes the edit (undo and execute), so one use is one undo
+step. (``invoke_props_popup`` pushed a step of its own before the first change: two "Rotate
+Lighting" in Undo History per rotate.) The "Design" sub-panel holds the buttons; the "Basis Functions" sub-panel (closed
 by default) the paper's figure 4. The irradiance sphere is at the top of the main panel.
 """
 
@@ -21,6 +23,9 @@ from . import lights as lights_ui
 from . import panels, previews
 from .polls import NO_COEFFICIENTS, coefficients_poll, scene_poll
 
+# Drag step of the angles, as Blender's own Rotation fields: 1° per pixel dragged (the default
+# step, 3, turned 0.03° per pixel: 150 px, 3.9° in a 4.3 window)
+ANGLE_STEP = 100
 BASIS_SCALE = 3.0  # largest icon size, in UI units; smaller when 5 do not fit the width
 
 
@@ -53,11 +58,38 @@ class _Edit:
 
 
 class _Live:
-    """Mixin: from a button, a popup whose every change redoes the edit at once (the
-    Properties editor has no redo panel); scripts calling with EXEC_DEFAULT run at once."""
+    """Mixin: from a button, run with the ``IDENTITY`` values (those not given), then the
+    Adjust Last Operation popup, whose every change redoes the edit at once (the Properties
+    editor has no redo panel); scripts calling with EXEC_DEFAULT run at once."""
 
-    def invoke(self, context, event):
-        return context.window_manager.invoke_props_popup(self, event)
+    IDENTITY = {}
+
+    def invoke(self, context, _event):
+        for name, value in self.IDENTITY.items():
+            if not self.properties.is_property_set(name):
+                setattr(self, name, value)
+        result = self.execute(context)
+        if result == {"FINISHED"}:
+            adjust_after(context)
+        return result
+
+
+def adjust_after(context):
+    """Open Adjust Last Operation (F9) where ``context`` is, once the operator running now has
+    finished (a timer: the next turn of the event loop); nothing without a window."""
+    window, area, region = context.window, context.area, context.region
+    if window is None or area is None:
+        return
+
+    def popup():
+        try:
+            with bpy.context.temp_override(window=window, area=area, region=region):
+                bpy.ops.screen.redo_last("INVOKE_DEFAULT")
+        except (RuntimeError, ReferenceError, TypeError):  # the area closed meanwhile
+            pass
+        return None
+
+    bpy.app.timers.register(popup, first_interval=0.0)
 
 
 class SHLIGHT_OT_rotate(_Live, _Edit, bpy.types.Operator):
@@ -65,18 +97,22 @@ class SHLIGHT_OT_rotate(_Live, _Edit, bpy.types.Operator):
 
     bl_idname = "shlight.rotate"
     bl_label = "Rotate Lighting"
+    IDENTITY = {"yaw": 0.0, "pitch": 0.0, "roll": 0.0}
 
     yaw: bpy.props.FloatProperty(
         name="Yaw", description="Turn about the vertical +Z axis (+90° takes +X to +Y)",
-        subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau,
+        subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau, step=ANGLE_STEP,
+        options={"SKIP_SAVE"},
     )
     pitch: bpy.props.FloatProperty(
         name="Pitch", description="Turn about +X (+90° takes +Y to +Z), before the yaw",
-        subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau,
+        subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau, step=ANGLE_STEP,
+        options={"SKIP_SAVE"},
     )
     roll: bpy.props.FloatProperty(
         name="Roll", description="Turn about +Y (+90° takes +Z to +X), before the pitch",
-        subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau,
+        subtype="ANGLE", soft_min=-math.tau, soft_max=math.tau, step=ANGLE_STEP,
+        options={"SKIP_SAVE"},
     )
 
     def apply(self, scene):
@@ -128,10 +164,11 @@ class SHLIGHT_OT_exposure(_Live, _Edit, bpy.types.Operator):
 
     bl_idname = "shlight.exposure"
     bl_label = "Exposure"
+    IDENTITY = {"stops": 0.0}
 
     stops: bpy.props.FloatProperty(
         name="Stops", description="Brightness change in stops: +1 doubles the light",
-        default=0.0, soft_min=-4.0, soft_max=4.0, step=10,
+        default=0.0, soft_min=-4.0, soft_max=4.0, step=10, options={"SKIP_SAVE"},
     )
 
     def apply(self, scene):
@@ -144,10 +181,11 @@ class SHLIGHT_OT_saturation(_Live, _Edit, bpy.types.Operator):
 
     bl_idname = "shlight.saturation"
     bl_label = "Saturation"
+    IDENTITY = {"amount": 1.0}
 
     amount: bpy.props.FloatProperty(
         name="Amount", description="0 grey, 1 unchanged, above 1 more colourful",
-        default=0.5, soft_min=0.0, soft_max=2.0, subtype="FACTOR",
+        default=0.5, soft_min=0.0, soft_max=2.0, subtype="FACTOR", options={"SKIP_SAVE"},
     )
     band: bpy.props.EnumProperty(
         name="Bands",
@@ -173,18 +211,19 @@ class SHLIGHT_OT_band_gains(_Live, _Edit, bpy.types.Operator):
 
     bl_idname = "shlight.band_gains"
     bl_label = "Band Gains"
+    IDENTITY = {"ambient": 1.0, "directional": 1.0, "quadratic": 1.0}
 
     ambient: bpy.props.FloatProperty(
         name="Ambient", description="Gain of L00 (l = 0): the mean light",
-        default=1.0, soft_min=0.0, soft_max=4.0,
+        default=1.0, soft_min=0.0, soft_max=4.0, options={"SKIP_SAVE"},
     )
     directional: bpy.props.FloatProperty(
         name="Directional", description="Gain of l = 1: the difference between opposite sides",
-        default=1.0, soft_min=0.0, soft_max=4.0,
+        default=1.0, soft_min=0.0, soft_max=4.0, options={"SKIP_SAVE"},
     )
     quadratic: bpy.props.FloatProperty(
         name="Quadratic", description="Gain of l = 2: the finer shape (poles vs horizon, ...)",
-        default=1.0, soft_min=0.0, soft_max=4.0,
+        default=1.0, soft_min=0.0, soft_max=4.0, options={"SKIP_SAVE"},
     )
 
     def apply(self, scene):
