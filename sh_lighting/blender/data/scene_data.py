@@ -336,9 +336,10 @@ def coefficient_description(index):
 def gain_description(index):
     """The tooltip of gain ``index``."""
     return (
-        f"{COEFFICIENT_NAMES[index]} strength s_lm, {COEFFICIENT_PHRASES[index]}: scales the "
-        "RGB coefficient (lighting = s_lm × c_lm; 1 after Compute, Reset or a preset); "
-        "keyframable"
+        f"Strength of the {COEFFICIENT_PHRASES[index]} term ({COEFFICIENT_NAMES[index]}): 1 as "
+        "computed (after Compute, Reset or a preset), 0 removes it, 2 doubles it, below 0 "
+        "turns it over; press I to keyframe. The swatch beside it is the term's colour. "
+        "(The paper's gain s_lm: the lighting is s_lm × c_lm)"
     )
 
 

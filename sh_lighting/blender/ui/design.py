@@ -231,13 +231,27 @@ class SHLIGHT_OT_band_gains(_Live, _Edit, bpy.types.Operator):
 
 
 class SHLIGHT_OT_flip_vertical(_Edit, bpy.types.Operator):
-    """Mirror the SH lighting top to bottom: lit from below instead of above"""
+    """Mirror the lighting top to bottom: what came from above comes from below, and back
+    again on a second click"""
 
     bl_idname = "shlight.flip_vertical"
-    bl_label = "Lit from Below"
+    bl_label = "Flip Vertically"
 
     def apply(self, scene):
         return edits.flip_vertical(scene)
+
+
+# The smoothing buttons, in an artist's words from least to most (the paper's windows in their
+# tooltips): Lanczos damps less than Hanning at the same width (l = 2: 0.41 vs 0.25).
+SMOOTHING_ORDER = ("MINIMAL", "LANCZOS", "HANNING")
+SMOOTHING_LABELS = {"MINIMAL": "Just Enough", "LANCZOS": "Gentle", "HANNING": "Strong"}
+SMOOTHING_TIPS = {
+    "MINIMAL": "Just Enough: the least smoothing that leaves no negative light (the minimal "
+               "non-negative window)",
+    "LANCZOS": "Gentle: softens the lighting's rings a little (a Lanczos window, w_l = "
+               "sinc(l / 3))",
+    "HANNING": "Strong: softens them more (a Hanning window, w_l = (1 + cos(π l / 3)) / 2)",
+}
 
 
 class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
@@ -265,8 +279,9 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
 
     @classmethod
     def description(cls, context, props):
-        """The docstring, or for Minimal the negative-light warning it removes (the panel's
-        warning button)."""
+        """What the button does in words, then the paper's (the window and its formula); for
+        Just Enough with negative light, the warning it removes (the panel's button)."""
+        words = SMOOTHING_TIPS[props.kind]
         scene = context.scene
         if props.kind == "MINIMAL" and scene is not None and scene_data.has_coefficients(scene):
             try:
@@ -276,7 +291,7 @@ class SHLIGHT_OT_window(_Edit, bpy.types.Operator):
             if warning:
                 return (f"{warning}.\nClick: the least smoothing that makes the irradiance "
                         "non-negative for every normal")
-        return cls.bl_rna.description
+        return f"{words}.\n{cls.bl_rna.description}"
 
     def draw(self, context):
         layout = self.layout
@@ -297,8 +312,8 @@ def window_report(result):
     """One readable line about a ``edits.WindowResult``: the band factors and the error
     against the world image with and without the window, or why it is not shown."""
     w = result.window
-    text = (f"{edits.LABELS[result.kind]} window applied: directional ×{w[1]:.2f}, "
-            f"quadratic ×{w[2]:.2f}")
+    text = (f"Smoothing '{SMOOTHING_LABELS[result.kind]}' ({edits.LABELS[result.kind]} window) "
+            f"applied: directional ×{w[1]:.2f}, quadratic ×{w[2]:.2f}")
     cost = result.cost
     if cost is not None:
         text += (f"; error vs the world image {100 * cost.windowed_mean.max():.1f} % of its "
@@ -343,10 +358,10 @@ def draw_design(layout, context):
     row.operator("shlight.flip_vertical", icon="MOD_MIRROR")
 
     col = layout.column(align=True)
-    col.label(text="Tame ringing")
+    col.label(text="Smooth the lighting")
     row = col.row(align=True)
-    for kind in edits.WINDOWS:
-        row.operator("shlight.window", text=edits.LABELS[kind]).kind = kind
+    for kind in SMOOTHING_ORDER:
+        row.operator("shlight.window", text=SMOOTHING_LABELS[kind]).kind = kind
     lights_ui.draw_lights(layout.row(align=True))
 
 

@@ -24,8 +24,14 @@ from .operators import beyond_selection
 from . import previews
 
 CHANNELS = "RGB"
-# What each coefficient does, in a few characters (the full wording is in the tooltips).
-SHORT_PHRASES = ("ambient", "±Y", "up/down", "±X", "xy", "yz", "poles", "xz", "x²−y²")
+# What each coefficient does, in an artist's few words (its name L_lm and the full wording are
+# in the tooltips): light overall, from +Y (back) vs −Y (front), above vs below, +X (right) vs
+# −X (left), along the diagonals, at the poles vs the horizon, along X vs along Y.
+SHORT_PHRASES = ("Overall", "Back/front", "Up/down", "Right/left", "Diagonal XY",
+                 "Diagonal YZ", "Poles/horizon", "Diagonal XZ", "X vs Y")
+# What the swatch beside each line is (its tooltip and the gain's say it)
+SWATCH_NOTE = ("The swatch beside it is the term's colour (for a term that takes light away, "
+               "the colour it takes)")
 IRRADIANCE_SCALE = 6.0  # the sphere: 6 UI units (120 px at scale 1)
 CHARACTER_WIDTH = 6.5  # mean width of a UI character in px at scale 1 (Blender's default font)
 CHOICE_LABEL_FACTOR = 0.26  # the label column of Apply To and Mode
@@ -98,7 +104,7 @@ def negative_light_line(coeffs):
 
 def sphere_caption(stops):
     """The line under the sphere: what it is and how it is exposed."""
-    return f"White sphere, peak shown white ({stops:+.1f} EV)"
+    return f"White ball, auto-exposed ({stops:+.1f} EV)"
 
 
 def draw_sphere(layout, context, coeffs):
@@ -254,13 +260,15 @@ def draw_coefficients(layout, context):
         left = split.row(align=True)
         left.alignment = "LEFT"
         op = left.operator(
-            SHLIGHT_OT_show_channels.bl_idname, text=f"{name} {SHORT_PHRASES[index]}",
+            SHLIGHT_OT_show_channels.bl_idname, text=SHORT_PHRASES[index],
             icon="DISCLOSURE_TRI_DOWN" if shown[index] else "DISCLOSURE_TRI_RIGHT",
             emboss=False)
         op.index = index
         right = split.row(align=True)
         right.template_icon(icon_value=previews.swatch(index, coeffs[index]).icon_id)
-        right.prop(scene, f'["{scene_data.GAIN_NAMES[index]}"]', text="")
+        # A label of its own: Blender titles a text-less field's tooltip with the property's
+        # key ("sh_L10_gain"); with one, the tooltip is the description alone
+        right.prop(scene, f'["{scene_data.GAIN_NAMES[index]}"]', text="×")
         if shown[index]:
             box = col.box().column(align=True)
             path = f'["{scene_data.PROPERTY_NAMES[index]}"]'
@@ -288,7 +296,8 @@ class SHLIGHT_OT_show_channels(bpy.types.Operator):
                                              edits.luminance())[props.index]
             except ValueError:
                 pass
-        return f"{text}.\nClick to show or hide its R, G, B values"
+        return (f"{COEFFICIENT_NAMES[props.index]}: {text}.\n{SWATCH_NOTE}.\nClick to show or "
+                "hide its R, G, B values")
 
     def execute(self, context):
         shown = getattr(context.window_manager, SHOW_CHANNELS)

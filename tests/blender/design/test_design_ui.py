@@ -253,7 +253,8 @@ def test_minimal_window_makes_a_single_sun_world_non_negative_and_reports_costs(
     c = costs["MINIMAL"]
     w = minimal.window
     expected = (
-        f"Minimal window applied: directional ×{w[1]:.2f}, quadratic ×{w[2]:.2f}; error vs the "
+        f"Smoothing 'Just Enough' (Minimal window) applied: directional ×{w[1]:.2f}, "
+        f"quadratic ×{w[2]:.2f}; error vs the "
         f"world image {100 * c.windowed_mean.max():.1f} % of its light (without: "
         f"{100 * c.plain_mean.max():.1f} %)"
     )
@@ -414,7 +415,7 @@ def test_main_panel_shows_the_sphere_and_one_warning_line(addon, monkeypatch):
     panels.draw_main(layout, bpy.context)
     assert "shlight.window" not in layout.operators()
     # the same one line, no warning: what the sphere shows and how it is exposed
-    assert "White sphere, peak shown white (-1.2 EV)" in layout.text()
+    assert "White ball, auto-exposed (-1.2 EV)" in layout.text()
 
 
 def test_design_panel_draws_every_design_operator(addon):

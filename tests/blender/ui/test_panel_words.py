@@ -79,7 +79,10 @@ def three_objects():
         scene.collection.objects.link(obj)
         obj.select_set(name == "Lit")
         made.append(material)
-    scene_data.store(scene, np.eye(9, 3), {"source": "SCRIPT"})
+    ambient = np.zeros((9, 3))
+    ambient[0] = 1.0
+    ambient[2] = 0.3  # light from above
+    scene_data.store(scene, ambient, {"source": "SCRIPT"})
     return made
 
 
@@ -122,3 +125,38 @@ def test_material_preview_says_its_studio_light_adds_to_the_sh(addon):
     assert switch[1] is preview.space_data.shading
     assert panels.studio_preview(ViewContext("MATERIAL", use_scene_world=True)) is None
     assert panels.studio_preview(ViewContext("RENDERED")) is None
+
+
+def test_the_panel_speaks_an_artists_words_first(addon):
+    """Each coefficient line says what the term does ("Up/down", not "L10 up/down"); its
+    tooltip names it (L10) and says what the swatch is; the strength field has a label of
+    its own, so Blender does not title its tooltip "sh_L10_gain", and the tooltip says what
+    the number does before the paper's s_lm; the smoothing buttons say how much, the paper's
+    windows in their tooltips; Flip Vertically says what it does."""
+    three_objects()
+    layout = RecordingLayout()
+    panels.draw_coefficients(layout, bpy.context)
+    names = [c[3]["text"] for c in layout.of("operator") if c[1] == "shlight.show_channels"]
+    assert names[:3] == ["Overall", "Back/front", "Up/down"] and len(names) == 9
+    assert not any(name.startswith("L") for name in names)
+    assert max(map(len, names)) <= 13  # the name column at the sidebar's default width
+    gains = [c for c in layout.of("prop") if c[2].endswith('_gain"]')]
+    assert len(gains) == 9 and {c[3]["text"] for c in gains} == {"×"}
+    tip = panels.SHLIGHT_OT_show_channels.description(bpy.context, SimpleNamespace(index=2))
+    assert tip.startswith("L10: ") and "swatch beside it is the term's colour" in tip
+    gain_tip = scene_data.gain_description(2)
+    assert gain_tip.startswith("Strength of the light from above vs below term (L10): 1 as "
+                               "computed")
+    assert gain_tip.index("removes it") < gain_tip.index("s_lm")
+    from sh_lighting.blender.ui import design as design_ui
+
+    layout = RecordingLayout()
+    design_ui.draw_design(layout, bpy.context)
+    smoothing = [c[3]["text"] for c in layout.of("operator") if c[1] == "shlight.window"]
+    assert smoothing == ["Just Enough", "Gentle", "Strong"]
+    assert "Smooth the lighting" in layout.text() and "ringing" not in layout.text()
+    for kind, paper in (("MINIMAL", "minimal non-negative"), ("LANCZOS", "Lanczos"),
+                        ("HANNING", "Hanning")):
+        tip = design_ui.SHLIGHT_OT_window.description(bpy.context, SimpleNamespace(kind=kind))
+        assert tip.startswith(design_ui.SMOOTHING_LABELS[kind] + ": ") and paper in tip
+    assert design_ui.SHLIGHT_OT_flip_vertical.bl_label == "Flip Vertically"
