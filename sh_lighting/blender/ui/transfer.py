@@ -2,6 +2,8 @@
 (Shadows)" sub-panel. The logic is ``blender.transfer``; nothing here bakes or writes data
 itself."""
 
+import os
+
 import bpy
 
 from ..transfer import apply as transfer_apply
@@ -20,6 +22,17 @@ MODE_ITEMS = (
      "The transfer alone drives the surface: shadows and bounce light, noise free at one "
      "sample; no lamps or reflections"),
 )
+
+
+# OpenImageIO's debug channel (a Blender build with it on printed ~90 "OIIO DEBUG" lines per
+# bake): sent nowhere unless the user chose a file for it. OIIO opens it at its first message.
+OIIO_DEBUG_FILE = "OPENIMAGEIO_DEBUG_FILE"
+
+
+def quiet_image_library():
+    """Send OpenImageIO's debug messages to the null device (unless a file is set)."""
+    if not os.environ.get(OIIO_DEBUG_FILE):
+        os.environ[OIIO_DEBUG_FILE] = os.devnull
 
 
 def _selected_meshes(context):
@@ -60,6 +73,7 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
 
     def execute(self, context):
         objects = _selected_meshes(context)
+        quiet_image_library()
         try:
             target = self.error_target / 100.0 if self.use_error_target else None
             info = bake.bake_transfer(context.scene, objects, self.samples,
@@ -103,7 +117,9 @@ class SHLIGHT_OT_apply_transfer(bpy.types.Operator):
 
     def execute(self, context):
         scene = context.scene
-        objects = objects_for_target(context, scene.sh_lighting.apply_target)
+        # Cameras, lamps, empties (Select All) have no transfer to apply: left out silently
+        objects = [o for o in objects_for_target(context, scene.sh_lighting.apply_target)
+                   if o.type == "MESH"]
         try:
             mode = scene.sh_lighting.apply_mode if self.mode == "SCENE" else self.mode
             result = transfer_apply.apply_transfer(objects, scene, mode)
