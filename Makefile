@@ -65,8 +65,10 @@ bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_photo
 	$(PY) -m benchmarks.fragments
 
-package: $(STAMP)
-	$(PY) -m tools.package dist
+# The extension zip, with the standard library alone (no .venv); BLENDER=/path/to/blender
+# also runs Blender's own `blender --command extension validate` on it.
+package:
+	$(PYTHON) -m tools.package dist $(if $(BLENDER),--check $(BLENDER))
 
 clean:
 	rm -rf build dist out .pytest_cache

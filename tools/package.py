@@ -1,65 +1,74 @@
-"""Build the installable extension zip with Blender's own extension tool.
+"""Build the installable extension zip with the standard library alone (no bpy, no .venv).
 
 The repository keeps ``blender_manifest.toml`` and the shipped ``presets/*.json`` at the top
 level beside the ``sh_lighting`` package; Blender wants the manifest next to ``__init__.py``.
-This stages them (the presets into the package's ``presets/``) in a temporary folder, runs
-``blender_ext.py validate`` and ``build`` on it, and prints the zip.
+The zip holds, at its root, the package's files, the manifest, the licence and the presets
+(in ``presets/``, where ``preset_io.shipped_preset_dir`` looks once installed), named
+``<id>-<version>.zip`` from the manifest, as ``blender --command extension build`` names it.
 
-Usage: python -m tools.package [OUTPUT_DIR]   (default: dist)
+``--check BLENDER`` also runs Blender's own ``blender --command extension validate`` on the
+zip (optional: the release check; ``make package`` does not need a Blender).
+
+Usage: python -m tools.package [OUTPUT_DIR] [--check BLENDER]   (default: dist)
 """
 
-import shutil
+import argparse
 import subprocess
-import sys
-import tempfile
+import tomllib
+import zipfile
 from pathlib import Path
 
-import bpy
-
 ROOT = Path(__file__).resolve().parent.parent
+SKIPPED = {"__pycache__"}
 
 
-def blender_ext_command():
-    scripts = Path(bpy.utils.system_resource("SCRIPTS"))
-    tool = scripts / "addons_core" / "bl_pkg" / "cli" / "blender_ext.py"
-    tags = scripts / "modules" / "_bpy_internal" / "extensions" / "tags.py"
-    return [sys.executable, str(tool)], tags
+def manifest():
+    with open(ROOT / "blender_manifest.toml", "rb") as f:
+        return tomllib.load(f)
 
 
-def stage(destination):
-    """Copy the package, manifest, licence and shipped presets into the new folder
-    ``destination``; the presets go to ``presets/`` inside the package, where
-    ``sh_lighting.blender.presets.preset_io.shipped_preset_dir`` looks once installed.
-    """
-    shutil.copytree(
-        ROOT / "sh_lighting", destination, ignore=shutil.ignore_patterns("__pycache__", "*.pyc")
-    )
+def members():
+    """(path in the zip, file on disk), sorted: the package, the manifest, the licence and
+    the presets."""
+    found = []
+    package = ROOT / "sh_lighting"
+    for path in sorted(package.rglob("*")):
+        if path.is_file() and not SKIPPED & set(path.parts) and path.suffix != ".pyc":
+            found.append((path.relative_to(package).as_posix(), path))
     for name in ("blender_manifest.toml", "LICENSE"):
-        shutil.copy2(ROOT / name, destination / name)
-    presets = destination / "presets"
-    presets.mkdir(exist_ok=True)
+        found.append((name, ROOT / name))
     for preset in sorted((ROOT / "presets").glob("*.json")):
-        shutil.copy2(preset, presets / preset.name)
-    return destination
+        found.append((f"presets/{preset.name}", preset))
+    return found
 
 
 def build(output_dir):
-    """Validate and build the extension; returns the path of the zip."""
+    """Write the extension zip into ``output_dir``; returns its path."""
+    info = manifest()
     output_dir = Path(output_dir).resolve()
     output_dir.mkdir(parents=True, exist_ok=True)
-    command, tags = blender_ext_command()
-    with tempfile.TemporaryDirectory() as tmp:
-        source = stage(Path(tmp) / "sh_lighting")
-        subprocess.run(command + ["validate", str(source), "--valid-tags", str(tags)], check=True)
-        subprocess.run(
-            command
-            + ["build", "--source-dir", str(source), "--output-dir", str(output_dir),
-               "--valid-tags", str(tags)],
-            check=True,
-        )
-    zips = sorted(output_dir.glob("sh_lighting-*.zip"), key=lambda p: p.stat().st_mtime)
-    return zips[-1]
+    path = output_dir / f"{info['id']}-{info['version']}.zip"
+    temporary = path.with_suffix(".zip.part")
+    with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED) as archive:
+        for name, source in members():
+            archive.write(source, name)
+    temporary.replace(path)
+    return path
+
+
+def check(zip_path, blender):
+    """Blender's own validation of the built zip (raises CalledProcessError if it fails)."""
+    subprocess.run([blender, "--factory-startup", "--command", "extension", "validate",
+                    str(zip_path)], check=True)
 
 
 if __name__ == "__main__":
-    print(build(sys.argv[1] if len(sys.argv) > 1 else ROOT / "dist"))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("output_dir", nargs="?", default=str(ROOT / "dist"))
+    parser.add_argument("--check", metavar="BLENDER",
+                        help="also validate the zip with this Blender (4.2 or later)")
+    args = parser.parse_args()
+    built = build(args.output_dir)
+    if args.check:
+        check(built, args.check)
+    print(built)
