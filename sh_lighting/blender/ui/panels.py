@@ -28,7 +28,7 @@ CHANNELS = "RGB"
 # in the tooltips): light overall, from +Y (back) vs −Y (front), above vs below, +X (right) vs
 # −X (left), along the diagonals, at the poles vs the horizon, along X vs along Y.
 SHORT_PHRASES = ("Overall", "Back/front", "Up/down", "Right/left", "Diagonal XY",
-                 "Diagonal YZ", "Poles/horizon", "Diagonal XZ", "X vs Y")
+                 "Diagonal YZ", "Poles/sides", "Diagonal XZ", "X vs Y")
 # What the swatch beside each line is (its tooltip and the gain's say it)
 SWATCH_NOTE = ("The swatch beside it is the term's colour (for a term that takes light away, "
                "the colour it takes)")
