@@ -13,6 +13,7 @@ Usage: python -m tools.package [OUTPUT_DIR] [--check BLENDER]   (default: dist)
 """
 
 import argparse
+import shutil
 import subprocess
 import tomllib
 import zipfile
@@ -40,6 +41,17 @@ def members():
     for preset in sorted((ROOT / "presets").glob("*.json")):
         found.append((f"presets/{preset.name}", preset))
     return found
+
+
+def stage(destination):
+    """The zip's contents written into the new folder ``destination`` (as Blender installs
+    them); returns it."""
+    destination = Path(destination)
+    for name, source in members():
+        target = destination / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(source, target)
+    return destination
 
 
 def build(output_dir):
