@@ -21,6 +21,7 @@ import numpy as np
 
 from ...core.supersample import average_fine_rows, hot_region
 from ..data import compat
+from ..data.node_links import is_world_edit
 from .images import load_image_pixels
 
 #: Samples per pixel: enough for the box filter to average a texel well (a constant world is
@@ -189,6 +190,15 @@ def _refine(scene, camera, path, coarse):
     coarse[row0:row1, columns] = average_fine_rows(fine, factor, row0, height)
 
 
+def _without_edits(world):
+    """Mute the World Edit nodes of ``world`` (a copy): a muted group passes its Color input
+    through, so the capture is the world as it is without the designed change."""
+    tree = world.node_tree
+    for node in tree.nodes if tree is not None else ():
+        if is_world_edit(node):
+            node.mute = True
+
+
 def capture_world(world, width=256, samples=DEFAULT_SAMPLES, frame=None, refine=True):
     """Render ``world`` with Cycles: a (width/2, width, 4) float32 equirect array, rows top down.
 
@@ -216,6 +226,7 @@ def capture_world(world, width=256, samples=DEFAULT_SAMPLES, frame=None, refine=
     scene = camera_data = camera = copy = None
     try:
         copy = world.copy()
+        _without_edits(copy)
         scene = bpy.data.scenes.new("SH Lighting Capture")
         scene.world = copy
         if hasattr(copy, "cycles"):

@@ -20,7 +20,7 @@ from ...core.projection import project_equirect
 from ...core.irradiance import error_estimate
 from ...core.world_map import apply_mapping
 from ..data import compat
-from ..data.node_links import MutedLink, source_socket
+from ..data.node_links import MutedLink, colour_source, source_socket
 from .capture import CaptureError, capture_world
 from .images import (
     DecodeError,
@@ -261,7 +261,10 @@ def _image_source(world, output, scene):
     strength = background.inputs["Strength"]
     if strength.is_linked:
         raise _Unsupported("the Background's Strength is linked")
-    colour = _source_socket(background.inputs["Color"])
+    try:  # what the world is without a World Edit (``world_edit``) in its colour
+        colour = colour_source(background.inputs["Color"], strict=True)
+    except MutedLink as error:
+        raise _Unsupported(str(error)) from None
     if colour is None:
         raise _Unsupported("the Background has a plain colour")
     texture = colour.node
