@@ -43,6 +43,7 @@ from .blender.transfer import apply as _transfer_apply
 from .blender.transfer import bake as _transfer
 from .blender.design import compute as _design_compute
 from .blender.world import reader as _world
+from .blender import world_edit as _world_edit
 from .formats.presets import PresetError
 
 # What the command line (sh_lighting.cli) uses of the Blender layer, through here only.
@@ -72,6 +73,7 @@ __all__ = [
     "WorldError", "AnimatedError", "compute_from_world", "get_coefficients", "get_computed", "get_provenance",
     "set_coefficients",
     "reset", "ensure_node_group", "apply_to_materials", "remove_from_materials",
+    "edit_world", "remove_world_edit",
     # presets and interop
     "FORMATS", "PresetError", "export_preset", "import_preset", "shipped_presets",
     "user_presets", "save_user_preset", "remove_user_preset",
@@ -252,6 +254,19 @@ def apply_to_materials(materials, scene=None, mode=_materials.DEFAULT_MODE):
     if scene is None:
         scene = bpy.context.scene
     return _transfer_apply.apply_keeping_transfer(_material_list(materials), scene, mode)[0]
+
+
+def edit_world(scene=None):
+    """Edit World: add the designed change of ``scene``'s lighting to its world (the default
+    Apply in Cycles, docs/blender.md); returns the ``core.world_edit.Clamping`` measured.
+    A ValueError, nothing changed, when the world cannot be edited."""
+    return _world_edit.edit_world(scene or bpy.context.scene)
+
+
+def remove_world_edit(scene=None):
+    """Take the World Edit out of ``scene``'s world, restoring it; True if there was one."""
+    scene = scene or bpy.context.scene
+    return _world_edit.remove(scene.world)
 
 
 def remove_from_materials(materials):

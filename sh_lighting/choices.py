@@ -39,10 +39,19 @@ FILAMENT_FRAMES = {
     "cmgen": "cmgen's own output (its specular KTX) for the same equirect image",
     "gltf": "a glTF export of the Blender scene",
 }
-# How Apply drives a material (blender.shading.materials); the first is the default
-APPLY_MODES = ("KEEP_BSDF", "EMISSION")
+# What Apply does (blender.ui.operators); the first is the default: "AUTO" resolves per render
+# engine at Apply time (``resolve_mode``): Edit World in Cycles, Keep BSDF in EEVEE
+APPLY_MODES = ("AUTO", "WORLD", "KEEP_BSDF", "EMISSION")
+# The modes that change materials (blender.shading.materials; the command line's --mode)
+MATERIAL_MODES = ("KEEP_BSDF", "EMISSION")
 # (id, name, description) of each Apply mode, for the Mode menus
 APPLY_MODE_ITEMS = (
+    ("AUTO", "Default",
+     "Edit World in Cycles (path-traced shadows, bounces and reflections of the edited "
+     "world), Keep BSDF in EEVEE"),
+    ("WORLD", "Edit World",
+     "Add the designed change to the world itself; the materials stay as they are (Cycles: "
+     "every shadow, bounce and reflection)"),
     ("KEEP_BSDF", "Keep BSDF",
      "Keep the material's BSDF (lamps, shadows, reflections); SH replaces the world's diffuse "
      "light (Cycles)"),
@@ -50,6 +59,15 @@ APPLY_MODE_ITEMS = (
      "Drive the surface by the SH emission alone: exact and noise free, no lamps or "
      "reflections"),
 )
+# What "AUTO" is in each render engine (any other engine: Keep BSDF)
+AUTO_MODES = {"CYCLES": "WORLD"}
+
+
+def resolve_mode(mode, engine):
+    """The mode Apply uses for ``mode`` in render engine ``engine`` ("AUTO" resolved)."""
+    return AUTO_MODES.get(engine, "KEEP_BSDF") if mode == "AUTO" else mode
+
+
 # What lights the unseen side of a grey ball in Match Photo (core.photo.PRIORS); the first
 # is the default
 PHOTO_PRIORS = ("mirror", "ambient", "chrome", "photo", "none")

@@ -3,7 +3,7 @@
 import argparse
 import re
 
-from ..choices import APPLY_MODES
+from ..choices import MATERIAL_MODES
 
 
 def whole_range(text):
@@ -63,7 +63,7 @@ def add_scene(parser, what="scene of the .blend"):
 def add_mode(parser):
     """``apply --mode``: keep the BSDF (default) or drive the surface by the SH emission."""
     parser.add_argument(
-        "--mode", choices=APPLY_MODES, default=APPLY_MODES[0],
+        "--mode", choices=MATERIAL_MODES, default=MATERIAL_MODES[0],
         help="KEEP_BSDF (default): materials keep their BSDF (lamps, shadows, reflections) and "
         "SH replaces the world's diffuse light, which the world then no longer gives to "
         "diffuse rays (Cycles); EMISSION: the SH emission alone drives the surface")

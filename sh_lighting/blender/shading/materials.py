@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import bpy
 
-from ...choices import APPLY_MODES
+from ...choices import MATERIAL_MODES
 from ..data import compat
 from . import glossy, keep_bsdf, world_diffuse
 from .diffuse_weight import diffuse_leaves, linked_socket, reflects_only, surface_leaves
@@ -26,7 +26,7 @@ from .nodes import GROUP_NAME, ensure_node_group
 # "added": [names of the other nodes added]} (version 1: emission, nothing else added).
 NODE_MARKER = "sh_lighting_original_links"
 RECORD_VERSION = 2
-MODES = APPLY_MODES
+MODES = MATERIAL_MODES
 DEFAULT_MODE = MODES[0]
 GROUP_NODE_WIDTH = 200.0  # px in the node editor: "SH Irradiance" and its sockets in full
 

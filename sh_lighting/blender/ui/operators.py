@@ -10,12 +10,13 @@ import time
 
 import bpy
 
-from ...choices import APPLY_MODE_ITEMS
+from ...choices import APPLY_MODE_ITEMS, resolve_mode
 from ..data import scene_data
 from ..shading import materials, notes
 from ..transfer import apply as transfer_apply
 from ..design import compute as design_compute
 from ..world import compute
+from .. import world_edit
 from .polls import coefficients_poll, scene_poll, world_poll
 
 
@@ -55,11 +56,15 @@ def _skip_reasons(result, limit=3):
     return [f"{name}: {reason}" for name, reason in result.skipped[:limit]]
 
 
-def _target_poll(cls, context):
-    """Shared poll of Apply and Remove: a scene with settings and something to act on."""
+def _target_poll(cls, context, world_too=False):
+    """Shared poll of Apply and Remove: a scene with settings and something to act on
+    (``world_too``: an Edit World mode or an edited world needs no objects)."""
     if not scene_poll(cls, context):
         return False
     scene = context.scene
+    if world_too and (world_edit.is_edited(scene.world) or resolve_mode(
+            scene.sh_lighting.apply_mode, scene.render.engine) == "WORLD"):
+        return True
     target = scene.sh_lighting.apply_target
     if target == "SELECTED" and not context.selected_objects:
         cls.poll_message_set("No objects selected: select objects or set Apply To to All")
@@ -159,7 +164,7 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return _target_poll(cls, context) and coefficients_poll(cls, context)
+        return _target_poll(cls, context, world_too=True) and coefficients_poll(cls, context)
 
     @classmethod
     def description(cls, context, props):
@@ -179,6 +184,9 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
         mode = getattr(self, "mode", "SCENE")
         if mode == "SCENE":
             mode = settings.apply_mode
+        mode = resolve_mode(mode, scene.render.engine)
+        if mode == "WORLD":
+            return _edit_world(self, scene)
         objects = objects_for_target(context, settings.apply_target)
         mats = materials.materials_of(objects)
         bare = bare_objects_note(materials.objects_without_material(objects))
@@ -197,6 +205,8 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
+        if result.changed and world_edit.is_edited(scene.world):
+            world_edit.remove(scene.world)  # the materials light it now: not twice
         changed, skipped = len(result.changed), len(result.skipped)
         label = dict((key, name) for key, name, _text in APPLY_MODE_ITEMS)[mode]
         message = f"SH lighting ({label}) applied to {changed} material(s), {skipped} skipped"
@@ -227,6 +237,27 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def _edit_world(operator, scene):
+    """Apply in mode "WORLD": the world edited, the SH taken out of the scene's materials
+    (the world lights them now; nothing counted twice)."""
+    try:
+        clamping = world_edit.edit_world(scene)
+    except (LookupError, ValueError) as error:
+        operator.report({"ERROR"}, str(error))
+        return {"CANCELLED"}
+    message = world_edit.applied_message(scene, clamping)
+    applied = [m for m in materials.materials_of(scene.objects) if materials.is_applied(m)]
+    if applied:
+        result = materials.remove_from_materials(applied)
+        message += (f"; SH lighting taken out of {len(result.changed)} material(s): the "
+                    "edited world lights them")
+    note = world_edit.clamping_note(clamping)
+    if note:
+        message += f"; {note}"
+    operator.report({"WARNING"} if note else {"INFO"}, message)
+    return {"FINISHED"}
+
+
 class SHLIGHT_OT_remove(bpy.types.Operator):
     """Remove SH irradiance lighting from the materials of the selected objects (or of all
     objects), restoring what Apply changed"""
@@ -237,11 +268,15 @@ class SHLIGHT_OT_remove(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return _target_poll(cls, context)
+        return _target_poll(cls, context, world_too=True)
 
     def execute(self, context):
         scene = context.scene
+        world = world_edit.remove(scene.world) and scene.world.name
         mats = materials.materials_of(objects_for_target(context, scene.sh_lighting.apply_target))
+        if world and not any(materials.is_applied(m) for m in mats):
+            self.report({"INFO"}, f"World Edit removed: world '{world}' is as it was")
+            return {"FINISHED"}
         widened = []
         if any(materials.mode_of(m) == "KEEP_BSDF" for m in mats):
             # The world gets its diffuse light back only once no Keep BSDF material is left:
@@ -257,6 +292,8 @@ class SHLIGHT_OT_remove(bpy.types.Operator):
             return {"CANCELLED"}
         changed, skipped = len(result.changed), len(result.skipped)
         message = f"SH lighting removed from {changed} material(s), {skipped} skipped"
+        if world:
+            message = f"World Edit removed from world '{world}'; " + message
         if widened:
             message += (f", {len(widened)} of them beyond the selection: the world lights "
                         "diffuse surfaces again, for the whole scene")

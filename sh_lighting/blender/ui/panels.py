@@ -15,10 +15,12 @@ from ...core.edits import describe_coefficients
 from ...core.minimum import (
     irradiance_minimum, mean_irradiance, negative_light_is_small, negative_light_warning)
 from ...core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
+from ...choices import resolve_mode
 from ..data import scene_data
 from ..design import edits
 from ..shading import materials, notes
 from ..world import reader
+from .. import world_edit
 from . import presets as presets_ui
 from .operators import beyond_selection
 from . import previews
@@ -200,7 +202,14 @@ def draw_main(layout, context):
     row.operator("shlight.apply", text="Apply", icon="MATERIAL")
     row.operator("shlight.remove", text="Remove", icon="X")
     column = layout.column(align=True)
-    for icon, line in notes.status_lines(scene, settings.apply_mode):
+    mode = resolve_mode(settings.apply_mode, scene.render.engine)
+    if mode == "WORLD":
+        lines = world_edit.status_lines(scene, settings.apply_mode)
+    else:
+        lines = notes.status_lines(scene, mode)
+        if settings.apply_mode == "AUTO":
+            lines.insert(0, ("INFO", "Default here: Keep BSDF"))
+    for icon, line in lines:
         column.label(text=line, icon=icon)
     beyond = beyond_selection(context)
     if beyond:

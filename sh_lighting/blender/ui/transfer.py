@@ -6,6 +6,7 @@ import os
 
 import bpy
 
+from ...choices import MATERIAL_MODES
 from ..transfer import apply as transfer_apply
 from ..transfer import bake
 from . import panels
@@ -122,6 +123,8 @@ class SHLIGHT_OT_apply_transfer(bpy.types.Operator):
                    if o.type == "MESH"]
         try:
             mode = scene.sh_lighting.apply_mode if self.mode == "SCENE" else self.mode
+            if mode not in MATERIAL_MODES:  # the world's modes: the transfer lights materials
+                mode = "KEEP_BSDF"
             result = transfer_apply.apply_transfer(objects, scene, mode)
         except ValueError as error:
             self.report({"ERROR"}, str(error))

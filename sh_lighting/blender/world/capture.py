@@ -199,12 +199,14 @@ def _without_edits(world):
             node.mute = True
 
 
-def capture_world(world, width=256, samples=DEFAULT_SAMPLES, frame=None, refine=True):
+def capture_world(world, width=256, samples=DEFAULT_SAMPLES, frame=None, refine=True,
+                  edits=False):
     """Render ``world`` with Cycles: a (width/2, width, 4) float32 equirect array, rows top down.
 
     ``frame``: the frame to evaluate an animated world at (default: the current scene's).
     ``refine``: re-render the block around very bright, small features (a sun) up to
     ``REFINE_FACTOR`` times finer and average it back (``core.supersample``).
+    ``edits``: render its World Edit too (by default the world is captured without it).
     Raises CaptureError when the world cannot be rendered. Leaves ``bpy.data`` as it found it.
     """
     if world is None:
@@ -226,7 +228,8 @@ def capture_world(world, width=256, samples=DEFAULT_SAMPLES, frame=None, refine=
     scene = camera_data = camera = copy = None
     try:
         copy = world.copy()
-        _without_edits(copy)
+        if not edits:
+            _without_edits(copy)
         scene = bpy.data.scenes.new("SH Lighting Capture")
         scene.world = copy
         if hasattr(copy, "cycles"):

@@ -5,6 +5,7 @@ shadow, bounce and reflection; ``edit`` puts it into the world and takes it out 
 
 from .edit import (  # noqa: F401
     WorldEditError,
+    applied_message,
     clamping_note,
     clamping_of,
     edit_world,
@@ -12,4 +13,5 @@ from .edit import (  # noqa: F401
     is_edited,
     own_coefficients,
     remove,
+    status_lines,
 )

@@ -268,3 +268,45 @@ def clamping_note(clamping):
     return (f"the edited world goes below zero over {100 * clamping.texels:.1f} % of the sky; "
             f"clamping it adds {100 * clamping.share:.2f} % of its light, so its nine terms "
             f"differ from the designed ones by up to {100 * clamping.difference:.2f} % of L00")
+
+
+# One line each under Apply in the sidebar (shading.notes.MODE_NOTE_CHARACTERS: 34).
+STATUS_NOTES = {
+    "AUTO": "Default here: Edit World",
+    "WORLD": "World edited: shadows, bounces",
+    "REPLACE": "No own SH: the 9 terms replace it",
+    "EDITED": "World Edit in: Apply to refresh",
+    "CLAMPED": "Clamp adds {share:.1f} % of the light",
+}
+
+
+def status_lines(scene, mode):
+    """[(icon, line)] the panel shows under Apply when Apply edits the world (``mode``
+    "AUTO" resolved to it, or "WORLD")."""
+    lines = []
+    if mode == "AUTO":
+        lines.append(("INFO", STATUS_NOTES["AUTO"]))
+    lines.append(("INFO", STATUS_NOTES["WORLD"]))
+    world = scene.world
+    if world is not None and scene_data.has_coefficients(scene):
+        if not own_coefficients(scene, world)[1]:
+            lines.append(("INFO", STATUS_NOTES["REPLACE"]))
+    clamping = clamping_of(world)
+    if clamping is not None and clamping.get("share", 0.0) >= NEGLIGIBLE:
+        lines.append(("ERROR", STATUS_NOTES["CLAMPED"].format(share=100 * clamping["share"])))
+    return lines
+
+
+def applied_message(scene, clamping):
+    """Apply's report when it edited the world."""
+    world = scene.world
+    own, keep = own_coefficients(scene, world)
+    designed = scene_data.get_coefficients(scene)
+    if not keep:
+        what = ("it has no coefficients of its own (Compute from World), so the nine designed "
+                "terms replace it, clamped at zero")
+    elif np.array_equal(designed, own):
+        what = "no edit yet: it renders exactly as before, edits reach it at render time"
+    else:
+        what = "it renders with the designed change to its nine terms"
+    return f"Edit World: world '{world.name}' edited, materials untouched; {what}"
