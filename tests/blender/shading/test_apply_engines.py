@@ -1,5 +1,5 @@
-"""The default Apply (Keep BSDF, Apply To Selected, through the operator)
-shows the stored lighting plus the lamps once, in Cycles and in EEVEE.
+"""The default Apply (Edit World in Cycles, Keep BSDF in EEVEE; Apply To Selected, through
+the operator) and Keep BSDF named in Cycles show the stored lighting plus the lamps once.
 
 A white diffuse sphere alone under a world of radiance 0.6 + 0.3 z (its nine coefficients are
 exact) plus a Sun lamp: after Apply each engine's render must be within 2 % of Cycles path
@@ -42,19 +42,23 @@ def _relative(image, s):
     return float(np.abs(a - b).mean() / b.mean()), float(a.mean() / b.mean())
 
 
-def _apply_default(s):
-    assert s.scene.sh_lighting.apply_mode == "KEEP_BSDF"
+def _apply_default(s, mode=None):
+    """Apply through the operator with the panel's defaults (Mode "Default": Edit World in
+    Cycles, Keep BSDF in EEVEE), or in ``mode`` named."""
+    assert s.scene.sh_lighting.apply_mode == "AUTO"
     assert s.scene.sh_lighting.apply_target == "SELECTED"
-    assert bpy.ops.shlight.apply() == {"FINISHED"}
+    done = bpy.ops.shlight.apply() if mode is None else bpy.ops.shlight.apply(mode=mode)
+    assert done == {"FINISHED"}
 
 
 def _background(image):
     return float(image[0, 0, :3].mean())
 
 
-def test_cycles_default_apply_is_the_world_once(lone_sphere):
+@pytest.mark.parametrize("mode", [None, "KEEP_BSDF"])
+def test_cycles_default_apply_is_the_world_once(lone_sphere, mode):
     s = lone_sphere
-    _apply_default(s)
+    _apply_default(s, mode)
     _, image = s.render(64)
     error, ratio = _relative(image, s)
     print(f"\nCycles, default Apply: mean |error| {error:.4f}, brightness {ratio:.4f}")
@@ -99,7 +103,7 @@ def test_eevee_default_apply_shows_the_worlds_reflections(addon, hdri_dir, tmp_p
     api.compute_from_world(s.scene)
     _, reference = s.render(256)
     mask = covered(reference)
-    _apply_default(s)
+    _apply_default(s, "KEEP_BSDF")  # in Cycles, where the default would edit the world
     tree = s.sphere.data.materials[0].node_tree
     outputs = {n.target: n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"}
     # Cycles renders what Keep BSDF always gave it: BSDF + SH; the reflections go to EEVEE's

@@ -128,7 +128,7 @@ def _panorama(scene, path, width=128):
 
 
 def test_edit_changes_irradiance_by_the_designed_change(addon, tmp_path):
-    scene, world, _sphere = _scene(tmp_path, size=32, samples=64)
+    scene, world, _sphere = _scene(tmp_path, size=32, samples=128)
     own = scene_data.get_coefficients(scene)
     _rgb, _alpha, normal = _render(scene, tmp_path / "normals.exr")
     world_edit.edit_world(scene)
