@@ -269,7 +269,10 @@ def extract_lights(scene, count=3, error_target=None, size_limit=SIZE_LIMIT, non
     _record(scene, made, collection)
     names = [obj.name for obj in made]
     record = {"source": "WORLD", "world": source.world, "method": "IMAGE",
-              "image": source.image.name, "lights": names}
+              "image": source.image.name, "lights": names,
+              "size_limit": float(size_limit)}  # what Edit World needs to find them again
+    if error_target is not None:
+        record["error_target"] = float(error_target)
     if names:
         record["sun"] = names[0]
     stored = scene_data.store(scene, rest, record)  # also the Reset values

@@ -30,7 +30,7 @@ from ...core.downsample import block_downsample, whole_factor
 from ..data import compat, scene_data
 from ..data.node_links import WORLD_EDIT_MARKER, is_world_edit, source_socket
 from ..world import reader
-from . import nodes
+from . import lights, nodes
 
 WORLD_POINTER = "sh_lighting_world_edit"  # on the world: its group
 GROUP_WORLD = "sh_lighting_world"  # on the group: the world it was made for
@@ -117,10 +117,10 @@ def backgrounds(world):
     return list(found.values())
 
 
-def _world_map(scene):
-    """(pixels, Strength, Mapping Euler) of the world without the edit, box-averaged to about
-    ``ESTIMATE_WIDTH`` wide."""
-    pixels, strength, euler = reader.world_radiance(scene, CAPTURE_WIDTH)
+def _world_map(scene, rest=None):
+    """(pixels, Strength, Mapping Euler) of the world without the edit (``rest``: that map
+    with the extracted sources taken out), box-averaged to about ``ESTIMATE_WIDTH`` wide."""
+    pixels, strength, euler = rest or reader.world_radiance(scene, CAPTURE_WIDTH)
     height, width = pixels.shape[:2]
     factor = whole_factor(height, width, ESTIMATE_WIDTH)
     if factor > 1:
@@ -128,11 +128,12 @@ def _world_map(scene):
     return pixels, strength, euler
 
 
-def measure_clamping(scene, own, keep):
-    """``core.world_edit.Clamping`` of the scene's designed lighting over its world."""
+def measure_clamping(scene, own, keep, rest=None):
+    """``core.world_edit.Clamping`` of the scene's designed lighting over its world (``rest``:
+    the world's map without its extracted sources)."""
     designed = scene_data.get_coefficients(scene)
     if keep:
-        pixels, strength, euler = _world_map(scene)
+        pixels, strength, euler = _world_map(scene, rest)
     else:
         pixels, strength, euler = np.zeros((64, 128, 3)), 1.0, None
     return core_world_edit.clamped_edit(pixels, strength, euler, designed - own, keep, designed)
@@ -154,12 +155,11 @@ def edit_world(scene, measure=True):
         remove(world)
     targets = backgrounds(world)
     own, keep = own_coefficients(scene, world)
-    clamping = None
-    if measure:
-        try:
-            clamping = measure_clamping(scene, own, keep)
-        except reader.WorldError as error:
-            raise WorldEditError(f"Edit World: {error}") from None
+    try:
+        sources, rest = lights.extracted_sources(scene, world) if keep else ([], None)
+        clamping = measure_clamping(scene, own, keep, rest) if measure else None
+    except ValueError as error:  # reader.WorldError, or the extraction refusing its record
+        raise WorldEditError(f"Edit World: {error}") from None
     strength_zero = [bg.name for bg in targets if not bg.inputs["Strength"].is_linked
                      and bg.inputs["Strength"].default_value == 0.0]
     if strength_zero:
@@ -169,7 +169,7 @@ def edit_world(scene, measure=True):
     group = nodes.new_group(world)
     record = {"version": 1, "backgrounds": []}
     try:
-        nodes.build(group, own, keep)
+        nodes.build(group, own, keep, sources, lights.luminance())
         group[GROUP_WORLD] = world
         for background in targets:
             record["backgrounds"].append(_insert(world.node_tree, background, group))

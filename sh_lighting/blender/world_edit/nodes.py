@@ -87,9 +87,45 @@ def _basis(b, direction):
     return basis
 
 
-def build(tree, own, keep):
+def _without_sources(b, colour, direction, sources, luminance):
+    """The colour with each extracted source (``lights.Source``) lowered to min(C, B) where
+    ω is within its cone and C is brighter than its threshold (``lights``)."""
+    for row, source in enumerate(sources):
+        row = 12 + 2 * row
+        near = b.vector_math("DOT_PRODUCT", 2, row, "ω · source")
+        b.link(direction, near.inputs[0])
+        near.inputs[1].default_value = source.direction
+        inside = b.math("GREATER_THAN", 3, row, "in its cone")
+        b.link(near.outputs["Value"], inside.inputs[0])
+        inside.inputs[1].default_value = source.cos_radius
+        bright = b.vector_math("DOT_PRODUCT", 2, row + 1, "luminance")
+        b.link(colour, bright.inputs[0])
+        bright.inputs[1].default_value = tuple(float(v) for v in luminance)
+        above = b.math("GREATER_THAN", 3, row + 1, "its texels")
+        b.link(bright.outputs["Value"], above.inputs[0])
+        above.inputs[1].default_value = source.threshold
+        taken = b.math("MULTIPLY", 4, row, "taken out")
+        b.link(inside.outputs["Value"], taken.inputs[0])
+        b.link(above.outputs["Value"], taken.inputs[1])
+        lowered = b.vector_math("MINIMUM", 4, row + 1, "min(C, B)")
+        b.link(colour, lowered.inputs[0])
+        lowered.inputs[1].default_value = source.background
+        change = b.vector_math("SUBTRACT", 5, row, "min(C, B) − C")
+        b.link(lowered.outputs["Vector"], change.inputs[0])
+        b.link(colour, change.inputs[1])
+        result = b.vector_math("MULTIPLY_ADD", 6, row, "without the source")
+        b.link(change.outputs["Vector"], result.inputs[0])
+        b.link(taken.outputs["Value"], result.inputs[1])
+        b.link(colour, result.inputs[2])
+        colour = result.outputs["Vector"]
+    return colour
+
+
+def build(tree, own, keep, sources=(), luminance=(0.2126, 0.7152, 0.0722)):
     """Clear ``tree`` and add the nodes of C' (module docstring): ``own`` (9, 3) L⁰,
-    ``keep`` k (True: the world's colour stays, under the change)."""
+    ``keep`` k (True: the world's colour stays, under the change), ``sources`` the
+    ``lights.Source``s the world must no longer emit (their Sun lamps do), ``luminance`` the
+    RGB weights of their thresholds."""
     tree.nodes.clear()
     b = Builder(tree)
     group_in = b.node("NodeGroupInput", 0, 4)
@@ -97,6 +133,8 @@ def build(tree, own, keep):
     direction = b.vector_math("NORMALIZE", 1, 1, "ω")
     b.link(coordinates.outputs["Generated"], direction.inputs[0])
     basis = _basis(b, direction.outputs["Vector"])
+    colour = _without_sources(b, group_in.outputs[0], direction.outputs["Vector"], sources,
+                              luminance)
 
     total = None
     for index in reversed(range(9)):  # small terms first, L00 last (as the material group)
@@ -127,7 +165,7 @@ def build(tree, own, keep):
     b.link(total, scaled.inputs[0])
     b.link(inverse.outputs["Value"], scaled.inputs["Scale"])
     edited = b.vector_math("MULTIPLY_ADD", 12, 9, "k Color + change")
-    b.link(group_in.outputs[0], edited.inputs[0])
+    b.link(colour, edited.inputs[0])
     value = 1.0 if keep else 0.0
     edited.inputs[1].default_value = (value, value, value)
     b.link(scaled.outputs["Vector"], edited.inputs[2])

@@ -11,7 +11,14 @@ import bpy
 import numpy as np
 import pytest
 from blender_files import write_exr
-from blender_scenes import environment_world, read_exr, setup_render, sky_map, unpack
+from blender_scenes import (
+    environment_world,
+    read_exr,
+    setup_render,
+    sky_map,
+    sunny_map,
+    unpack,
+)
 from cli_runs import run
 
 from sh_lighting.blender import world_edit
@@ -258,3 +265,35 @@ def test_saved_file_renders_the_edit_without_the_add_on(addon, tmp_path):
     there, _, _ = unpack(read_exr(tmp_path / "there.exr"), scene.view_layers[0].name)
     assert np.array_equal(here, there), np.abs(here - there).max()
     assert json.loads(world_edit.group_of(world)[world_edit.edit.RECORD])["backgrounds"]
+
+
+def test_extracted_sun_lights_the_scene_once(addon, tmp_path):
+    """Extract Lights makes the sun a Sun lamp; the edited world no longer emits it: the
+    sphere (lamp + edited world) renders as the original world did, not with the sun twice."""
+    from sh_lighting.blender.design import lights as design_lights
+
+    scene, world, sphere = _scene(tmp_path, rotation=EULER, strength=1.0, size=32, samples=64)
+    path = str(tmp_path / "sunny.exr")
+    write_exr(path, sunny_map()[0])
+    world.node_tree.nodes["Environment Texture"].image = bpy.data.images.load(path)
+    reference, _, normal = _render(scene, tmp_path / "reference.exr")
+    covered = np.linalg.norm(normal, axis=-1) > 0.5
+    info = design_lights.extract_lights(scene, count=1)
+    assert len(info.lights) == 1
+    world_edit.edit_world(scene)
+    group = world_edit.group_of(world)
+    assert sum(n.label == "without the source" for n in group.nodes) == 1
+    once, _, _ = _render(scene, tmp_path / "once.exr")
+    # the same without the sources taken out of the world: the sun twice
+    world_edit.edit.nodes.build(group, *world_edit.own_coefficients(scene, world))
+    twice, _, _ = _render(scene, tmp_path / "twice.exr")
+
+    def compare(image):
+        a, b = image[covered].astype(np.float64), reference[covered].astype(np.float64)
+        return float(a.mean() / b.mean()), float(np.abs(a - b).mean() / b.mean())
+
+    (ratio, error), (ratio_twice, error_twice) = compare(once), compare(twice)
+    print(f"\nextracted sun: brightness {ratio:.3f}, mean |error| {100 * error:.1f} % "
+          f"(sun left in the world: {ratio_twice:.3f}, {100 * error_twice:.1f} %)")
+    assert ratio_twice > 1.5  # what the masks are for
+    assert abs(ratio - 1.0) < 0.03 and error < 0.05
