@@ -166,6 +166,13 @@ METHODS = [
     ("EEVEE Keep BSDF (default)", "EEVEE", "KEEP_BSDF", EEVEE_SAMPLES, None),
     ("Cycles Emission Only, 1 spp", "CYCLES", "EMISSION", 1, None),
     ("EEVEE Emission Only", "EEVEE", "EMISSION", EEVEE_SAMPLES, None),
+    ("Cycles Edit World (default), 16 spp", "CYCLES", "WORLD", 16, None),
+    ("Cycles Edit World (default), 64 spp", "CYCLES", "WORLD", 64, None),
+]
+# Edit World with Extract Lights' lamps: (name, samples, lights); the world no longer emits
+# what the lamps do
+WORLD_LIGHTS_METHODS = [
+    (f"Cycles Edit World + Extract Lights ({LIGHTS}), 64 spp", 64, LIGHTS),
 ]
 
 
@@ -197,7 +204,9 @@ def measure(hdri, size, folder, only=None):
     for index, (name, engine, mode, samples, sampling) in enumerate(METHODS):
         if (name, engine, mode, samples, sampling) not in _chosen(METHODS, only):
             continue
-        if mode is not None:
+        if mode == "WORLD":
+            api.edit_world(scene)
+        elif mode is not None:
             materials.apply_to_materials(all_mats, scene, mode)
             if sampling is not None:
                 for material in all_mats:
@@ -205,8 +214,19 @@ def measure(hdri, size, folder, only=None):
         engine_id = compat.eevee_engine_id() if engine == "EEVEE" else "CYCLES"
         seconds, image = _render(scene, Path(folder) / f"{hdri}_{index}.exr", engine_id,
                                  samples, seed=index)
-        if mode is not None:
+        if mode == "WORLD":
+            api.remove_world_edit(scene)
+        elif mode is not None:
             materials.remove_from_materials(all_mats)
+        rows.append(_row(name, image, reference, masks, seconds))
+        print(f"{hdri}: {name}: {rows[-1]}", flush=True)
+    for index, (name, samples, count) in enumerate(_chosen(WORLD_LIGHTS_METHODS, only)):
+        api.extract_lights(scene, count=count)
+        api.edit_world(scene)
+        seconds, image = _render(scene, Path(folder) / f"{hdri}_w{index}.exr", "CYCLES",
+                                 samples, seed=200 + index)
+        api.remove_world_edit(scene)
+        api.compute_from_world(scene)  # deletes the extracted lights
         rows.append(_row(name, image, reference, masks, seconds))
         print(f"{hdri}: {name}: {rows[-1]}", flush=True)
     if not _chosen(TRANSFER_METHODS, only):

@@ -137,8 +137,11 @@ def extract_lights(scene, count=3, error_target=None, size_limit=_lights.SIZE_LI
     across) stay in the SH. The rest also becomes the Reset values; the lights it made earlier
     (never an artist's, nor a duplicate of one) are updated or deleted, and Compute from World
     deletes them. Returns a ``LightsInfo`` (``.report()``: one line saying what was found and
-    why not more). ``nonfinite`` "zero": NaN/Inf texels of the world image count as black."""
-    return _lights.extract_lights(scene, count, error_target, size_limit, nonfinite)
+    why not more). ``nonfinite`` "zero": NaN/Inf texels of the world image count as black. An
+    edited world (``edit_world``) takes the new values as its own."""
+    info = _lights.extract_lights(scene, count, error_target, size_limit, nonfinite)
+    _world_edit.refresh(scene)
+    return info
 
 
 def split_sun(scene):
@@ -157,8 +160,10 @@ def compute_from_world(scene, capture_width=None, nonfinite="raise"):
     the (9, 3) float64 array; raises ``WorldError`` (a ValueError) with a
     user-facing message, leaving the scene unchanged, when the world cannot be read.
     """
-    # also deletes extracted lights
-    return _design_compute.compute_from_world(scene, capture_width, nonfinite=nonfinite)[0]
+    # also deletes extracted lights; an edited world (``edit_world``) takes the new values
+    coeffs = _design_compute.compute_from_world(scene, capture_width, nonfinite=nonfinite)[0]
+    _world_edit.refresh(scene)
+    return coeffs
 
 
 def coefficients_from_photo(scene, path, circle, **options):

@@ -4,6 +4,7 @@ import bpy
 
 from ...core.lights import LARGEST_RADIUS, MAX_COUNT
 from ..design import lights
+from .. import world_edit
 from .polls import world_poll
 
 
@@ -59,7 +60,13 @@ class SHLIGHT_OT_extract_lights(bpy.types.Operator):
         except (LookupError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        self.report({"INFO"}, info.report())
+        message = info.report()
+        try:
+            refreshed = world_edit.refresh(context.scene)
+        except ValueError as error:
+            self.report({"WARNING"}, f"{message}; World Edit taken out: {error}")
+            return {"FINISHED"}
+        self.report({"INFO"}, f"{message}; {refreshed}" if refreshed else message)
         return {"FINISHED"}
 
 

@@ -113,7 +113,13 @@ class SHLIGHT_OT_compute_from_world(bpy.types.Operator):
             wm.progress_end()
             if workspace is not None:
                 workspace.status_text_set(None)
-        self.report({"INFO"}, with_note(compute.report(info, time.perf_counter() - start), stored))
+        message = with_note(compute.report(info, time.perf_counter() - start), stored)
+        try:
+            refreshed = world_edit.refresh(context.scene)
+        except ValueError as error:
+            self.report({"WARNING"}, f"{message}; World Edit taken out: {error}")
+            return {"FINISHED"}
+        self.report({"INFO"}, f"{message}; {refreshed}" if refreshed else message)
         return {"FINISHED"}
 
 

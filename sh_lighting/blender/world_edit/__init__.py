@@ -12,6 +12,7 @@ from .edit import (  # noqa: F401
     group_of,
     is_edited,
     own_coefficients,
+    refresh,
     remove,
     status_lines,
 )

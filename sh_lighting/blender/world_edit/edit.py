@@ -310,3 +310,19 @@ def applied_message(scene, clamping):
     else:
         what = "it renders with the designed change to its nine terms"
     return f"Edit World: world '{world.name}' edited, materials untouched; {what}"
+
+
+def refresh(scene):
+    """After Compute from World or Extract Lights wrote new Reset values: an edited world of
+    ``scene`` takes them as its own (and leaves out the new sources); a line saying so, or
+    None when the world is not edited. A WorldEditError: the edit was taken out, the world is
+    as it was without it."""
+    if not is_edited(scene.world):
+        return None
+    try:
+        clamping = edit_world(scene)
+    except WorldEditError:
+        remove(scene.world)
+        raise
+    note = clamping_note(clamping)
+    return "World Edit refreshed with the new values" + (f"; {note}" if note else "")

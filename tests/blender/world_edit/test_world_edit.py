@@ -297,3 +297,25 @@ def test_extracted_sun_lights_the_scene_once(addon, tmp_path):
           f"(sun left in the world: {ratio_twice:.3f}, {100 * error_twice:.1f} %)")
     assert ratio_twice > 1.5  # what the masks are for
     assert abs(ratio - 1.0) < 0.03 and error < 0.05
+
+
+def test_compute_from_world_refreshes_the_edit(addon, tmp_path):
+    """The world changes after Apply (Strength 1.5 → 2) and Compute from World stores its new
+    values: the edited world takes them as its own and renders exactly as the world again
+    (kept at the old ones, the difference would render as an edit)."""
+    from sh_lighting import api
+    from sh_lighting.blender.world import compute as world_compute
+
+    scene, world, _sphere = _scene(tmp_path)
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0
+    reference, _, _ = _render(scene, tmp_path / "world.exr")
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.5
+    world_edit.edit_world(scene)
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0
+    world_compute.compute_and_store(scene)  # the store alone: the edit keeps its old L⁰
+    stale, _, _ = _render(scene, tmp_path / "stale.exr")
+    assert np.abs(stale - reference).max() > 0.01
+    api.compute_from_world(scene)
+    assert world_edit.is_edited(world)
+    fresh, _, _ = _render(scene, tmp_path / "fresh.exr")
+    assert np.array_equal(fresh, reference)
