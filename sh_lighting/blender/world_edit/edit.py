@@ -187,10 +187,10 @@ def edit_world(scene, measure=True):
 
 def _insert(tree, background, group):
     colour, strength = background.inputs["Color"], background.inputs["Strength"]
-    source = source_socket(colour)
-    link = colour.links[0] if colour.is_linked else None
+    source = source_socket(colour)  # through reroutes; None for a muted link
+    link = colour.links[0] if colour.is_linked else None  # what Remove puts back, as it was
     entry = {"node": background.name,
-             "from": [source.node.name, source.identifier] if source is not None else None,
+             "from": [link.from_node.name, link.from_socket.identifier] if link else None,
              "muted": bool(link is not None and getattr(link, "is_muted", False))}
     node = tree.nodes.new("ShaderNodeGroup")
     node.node_tree = group

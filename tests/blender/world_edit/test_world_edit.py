@@ -319,3 +319,28 @@ def test_compute_from_world_refreshes_the_edit(addon, tmp_path):
     assert world_edit.is_edited(world)
     fresh, _, _ = _render(scene, tmp_path / "fresh.exr")
     assert np.array_equal(fresh, reference)
+
+
+def test_remove_restores_reroutes_muted_links_and_plain_colours(addon, tmp_path):
+    scene, world, _sphere = _scene(tmp_path)
+    tree = world.node_tree
+    background = tree.nodes["Background"]
+    texture = tree.nodes["Environment Texture"]
+    reroute = tree.nodes.new("NodeReroute")
+    tree.links.new(texture.outputs["Color"], reroute.inputs[0])
+    tree.links.new(reroute.outputs[0], background.inputs["Color"])
+    before = _tree_state(world)
+    world_edit.edit_world(scene)
+    assert world_edit.remove(world) and _tree_state(world) == before
+    background.inputs["Color"].links[0].is_muted = True
+    world_edit.edit_world(scene)
+    assert world_edit.remove(world) and _tree_state(world) == before
+    assert background.inputs["Color"].links[0].is_muted
+    tree.links.remove(background.inputs["Color"].links[0])
+    background.inputs["Color"].default_value = (0.2, 0.3, 0.4, 1.0)
+    before = _tree_state(world)
+    world_edit.edit_world(scene)
+    node = background.inputs["Color"].links[0].from_node
+    assert tuple(node.inputs["Color"].default_value) == pytest.approx((0.2, 0.3, 0.4, 1.0))
+    assert world_edit.remove(world) and _tree_state(world) == before
+    assert tuple(background.inputs["Color"].default_value) == pytest.approx((0.2, 0.3, 0.4, 1.0))
