@@ -29,6 +29,7 @@ from ...core import world_edit as core_world_edit
 from ...core.downsample import block_downsample, whole_factor
 from ..data import compat, scene_data
 from ..data.node_links import WORLD_EDIT_MARKER, is_world_edit, source_socket
+from ..design import lights as design_lights
 from ..world import reader
 from . import lights, nodes
 
@@ -36,6 +37,7 @@ WORLD_POINTER = "sh_lighting_world_edit"  # on the world: its group
 GROUP_WORLD = "sh_lighting_world"  # on the group: the world it was made for
 RECORD = "sh_lighting_world_edit_record"  # on the group: JSON of the links replaced
 CLAMPING = "sh_lighting_world_edit_clamping"  # on the group: {"share", "difference", ...}
+LAMPS = "sh_lighting_world_edit_lamps"  # on the group: {"lamps": [the Sun lamps it shows]}
 NODE_LABEL = "SH World Edit"
 ESTIMATE_WIDTH = 512  # the clamping is measured on the world's map box-averaged to this width
 CAPTURE_WIDTH = 256  # a procedural world is captured this wide for it
@@ -178,6 +180,8 @@ def edit_world(scene, measure=True):
             group[CLAMPING] = {"share": clamping.share, "texels": clamping.texels,
                                "difference": clamping.difference}
         world[WORLD_POINTER] = group
+        if sources:
+            _show_lamps(scene, group)
     except Exception:
         _restore(world, group, record)
         raise
@@ -244,6 +248,7 @@ def _restore(world, group, record):
             link = tree.links.new(socket, colour)
             if entry.get("muted") and hasattr(link, "is_muted"):
                 link.is_muted = True
+    _hide_lamps(group)
     for node in [n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup"
                  and n.node_tree == group]:
         tree.nodes.remove(node)
@@ -252,6 +257,29 @@ def _restore(world, group, record):
     if group.users == 0:
         bpy.data.node_groups.remove(group)
     world.update_tag()
+
+
+def _show_lamps(scene, group):
+    """Extract Lights' lamps are hidden from glossy and transmission rays while the world
+    shows their sources; the edited world does not, so the lamps are shown to them (their
+    reflections are the sources'), recorded on the group for ``_hide_lamps``."""
+    shown = []
+    for obj in design_lights.extracted_lights(scene):
+        if not obj.visible_glossy or not obj.visible_transmission:
+            obj.visible_glossy = obj.visible_transmission = True
+            shown.append(obj)
+    if shown:
+        group[LAMPS] = {"lamps": shown}
+
+
+def _hide_lamps(group):
+    value = group.get(LAMPS)
+    lamps = value.get("lamps", ()) if hasattr(value, "to_dict") else ()
+    for obj in lamps:
+        if isinstance(obj, bpy.types.Object) and obj.library is None:
+            obj.visible_glossy = obj.visible_transmission = False
+    if LAMPS in group:
+        del group[LAMPS]
 
 
 def clamping_of(world):

@@ -280,7 +280,10 @@ def test_extracted_sun_lights_the_scene_once(addon, tmp_path):
     covered = np.linalg.norm(normal, axis=-1) > 0.5
     info = design_lights.extract_lights(scene, count=1)
     assert len(info.lights) == 1
+    lamp = bpy.data.objects[info.lights[0]]
+    assert not lamp.visible_glossy  # the world's image reflects the sun
     world_edit.edit_world(scene)
+    assert lamp.visible_glossy and lamp.visible_transmission  # the edited world does not
     group = world_edit.group_of(world)
     assert sum(n.label == "without the source" for n in group.nodes) == 1
     once, _, _ = _render(scene, tmp_path / "once.exr")
@@ -297,6 +300,8 @@ def test_extracted_sun_lights_the_scene_once(addon, tmp_path):
           f"(sun left in the world: {ratio_twice:.3f}, {100 * error_twice:.1f} %)")
     assert ratio_twice > 1.5  # what the masks are for
     assert abs(ratio - 1.0) < 0.03 and error < 0.05
+    assert world_edit.remove(world)
+    assert not lamp.visible_glossy and not lamp.visible_transmission
 
 
 def test_compute_from_world_refreshes_the_edit(addon, tmp_path):
