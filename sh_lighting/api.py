@@ -109,8 +109,10 @@ def bake_transfer(scene, objects, samples=_transfer.DEFAULT_SAMPLES, report=prin
 
 
 def transfer_status(scene, obj):
-    """(state, message) of ``obj``'s bake: "NONE", "OK" or "STALE" (edited, moved, or the
-    scene's objects changed since the bake: bake again)."""
+    """(state, message) of ``obj``'s bake: "NONE", "OK" or "STALE" (edited, moved, or what
+    the bake saw of the scene's rendered objects changed: placement, geometry, shape keys,
+    modifiers, render visibility, collections, ray visibility; bake again). Evaluated at
+    once: a script's edit counts before the view layer updates."""
     return _transfer.status(scene, obj)
 
 

@@ -20,8 +20,8 @@ from ...core.sh import COEFFICIENT_NAMES
 from ..shading import materials
 from . import basis
 from .stale import (  # noqa: F401 (re-exported: the bake's names in one place)
-    ATTRIBUTE_NAMES, RECORD, RECORD_VERSION, geometry_fingerprint, record, remove_transfer,
-    scene_fingerprint, status,
+    ATTRIBUTE_NAMES, RECORD, RECORD_VERSION, evaluated_depsgraph, geometry_fingerprint, record,
+    remove_transfer, scene_fingerprint, status, view_layer_of,
 )
 
 SCRATCH_NAME = "sh_transfer_bake"
@@ -54,7 +54,7 @@ def check_objects(scene, objects):
     picked = list(objects)
     if not picked:
         raise TransferError("no objects to bake: select the meshes to bake")
-    view_layer = _view_layer(scene)
+    view_layer = view_layer_of(scene)
     for obj in picked:
         if not isinstance(obj, bpy.types.Object):
             raise TransferError(f"{obj!r} is not an object: pass Blender objects")
@@ -149,7 +149,6 @@ def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None, error_ta
         saved.restore()
     seconds = time.perf_counter() - started
     corners = vertices = 0
-    scene_print = scene_fingerprint(scene)
     for position, obj in enumerate(picked):
         transfer = _transfer([bake[position] for bake in bakes])
         bad = int(np.count_nonzero(~np.isfinite(transfer)))
@@ -159,11 +158,14 @@ def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None, error_ta
         _store(obj, transfer)
         corners += len(obj.data.loops)
         vertices += len(obj.data.vertices)
+        obj.data.update()
+    depsgraph = evaluated_depsgraph(scene)
+    scene_print = scene_fingerprint(scene, depsgraph)
+    for obj in picked:
         obj[RECORD] = json.dumps({
             "version": RECORD_VERSION, "samples": samples, "seconds": round(seconds, 3),
-            "geometry": geometry_fingerprint(obj), "scene": scene_print,
+            "geometry": geometry_fingerprint(obj, depsgraph), "scene": scene_print,
         })
-        obj.data.update()
     return BakeInfo([o.name for o in picked], corners, vertices, samples, seconds,
                     basis_seconds, notes)
 
@@ -257,7 +259,7 @@ class _Saved:
     def __init__(self, scene, picked):
         self.scene = scene
         self.picked = picked
-        self.view_layer = _view_layer(scene)
+        self.view_layer = view_layer_of(scene)
         self.world = scene.world
         self.render = {"engine": scene.render.engine}
         cycles = scene.cycles
@@ -319,9 +321,3 @@ class _Saved:
             if 0 <= self.render_colour[obj.name] < len(colours):
                 colours.render_color_index = self.render_colour[obj.name]
 
-
-def _view_layer(scene):
-    context_layer = getattr(bpy.context, "view_layer", None)
-    if bpy.context.scene == scene and context_layer is not None:
-        return context_layer
-    return scene.view_layers[0]

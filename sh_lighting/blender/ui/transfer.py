@@ -170,8 +170,9 @@ def transfer_lines(scene, active):
     baked = [o for o in scene.objects if o.type == "MESH" and bake.record(o) is not None]
     if not baked:
         return [("INFO", "No transfer baked: select meshes and bake")]
-    scene_print = bake.scene_fingerprint(scene)
-    states = {o.name: bake.status(scene, o, scene_print) for o in baked}
+    depsgraph = bake.evaluated_depsgraph(scene)
+    scene_print = bake.scene_fingerprint(scene, depsgraph)
+    states = {o.name: bake.status(scene, o, scene_print, depsgraph) for o in baked}
     stale = [name for name, (state, _message) in states.items() if state == "STALE"]
     lines = []
     if active is not None and active.name in states:
