@@ -151,3 +151,28 @@ def test_plain_apply_keeps_the_transfer_and_apply_transfer_follows_the_panels_mo
     assert bpy.ops.shlight.remove() == {"FINISHED"}
     assert bpy.ops.shlight.apply() == {"FINISHED"}
     assert materials.is_applied(material) and not transfer_apply.uses_transfer(material)
+
+
+def _addon_attributes():
+    return sorted(f"{mesh.name}.{attribute.name}" for mesh in bpy.data.meshes
+                  for attribute in mesh.attributes
+                  if attribute.name.startswith(("sh_T", bake.SCRATCH_NAME)))
+
+
+def test_remove_and_delete_transfer_leave_no_attribute_of_the_add_on(addon):
+    scene, ground, box = _scene(2, 0)
+    _select([ground, box])
+    assert bpy.ops.shlight.bake_transfer(samples=1) == {"FINISHED"}
+    assert len(_addon_attributes()) == 18
+    assert bpy.ops.shlight.apply_transfer() == {"FINISHED"}
+    _select([ground])
+    assert bpy.ops.shlight.remove() == {"FINISHED"}  # Keep BSDF: the whole scene's
+    assert _addon_attributes() == []
+    assert bake.record(ground) is None and bake.record(box) is None
+    # Delete Transfer: also what an interrupted bake left (the scratch attribute, no record)
+    _select([ground, box])
+    assert bpy.ops.shlight.bake_transfer(samples=1) == {"FINISHED"}
+    box.data.color_attributes.new(bake.SCRATCH_NAME, "FLOAT_COLOR", "CORNER")
+    del box[bake.RECORD]
+    assert bpy.ops.shlight.delete_transfer() == {"FINISHED"}
+    assert _addon_attributes() == [] and bake.record(ground) is None
