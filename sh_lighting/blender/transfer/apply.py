@@ -103,6 +103,21 @@ def remove_transfer_from(materials_list):
     return materials.remove_from_materials([m for m in materials_list if uses_transfer(m)])
 
 
+def delete_bakes(objects, material_names=()):
+    """Delete the transfer bakes (attributes, record) of ``objects`` and of the objects
+    using a material named in ``material_names`` (those Remove took the lighting out of);
+    the names of the objects that had one."""
+    names = set(material_names)
+    wanted = {o.as_pointer(): o for o in objects}
+    for obj in bpy.data.objects:
+        if any(s.material is not None and s.material.name_full in names
+               for s in getattr(obj, "material_slots", ())):
+            wanted.setdefault(obj.as_pointer(), obj)
+    local = [o for o in wanted.values() if o.library is None
+             and (o.type != "MESH" or o.data.library is None)]
+    return [o.name for o in local if bake.remove_transfer(o)]
+
+
 def uses_transfer(material):
     tree = getattr(material, "node_tree", None)
     return tree is not None and any(is_transfer_node(n) for n in tree.nodes)

@@ -20,11 +20,11 @@ from ...core.sh import COEFFICIENT_NAMES
 from ..shading import materials
 from . import basis
 from .stale import (  # noqa: F401 (re-exported: the bake's names in one place)
-    ATTRIBUTE_NAMES, RECORD, RECORD_VERSION, evaluated_depsgraph, geometry_fingerprint, record,
-    remove_transfer, scene_fingerprint, status, view_layer_of,
+    ATTRIBUTE_NAMES, RECORD, RECORD_VERSION, SCRATCH_NAME, evaluated_depsgraph,
+    geometry_fingerprint, has_transfer, record, remove_transfer, scene_fingerprint, status,
+    view_layer_of,
 )
 
-SCRATCH_NAME = "sh_transfer_bake"
 #: Cycles samples per corner: measured on the test scene (plane and box, tests/blender/
 #: test_transfer.py): the relative RMSE of T against a 1024-sample bake falls as 1/√samples
 #: (benchmarks/REPORT.md, "Transfer").

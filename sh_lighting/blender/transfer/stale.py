@@ -22,6 +22,7 @@ from ..data.scene_data import PROPERTY_NAMES
 
 ATTRIBUTE_NAMES = tuple(name.replace("sh_L", "sh_T", 1) for name in PROPERTY_NAMES)
 RECORD = "sh_transfer"
+SCRATCH_NAME = "sh_transfer_bake"  # the attribute Cycles bakes into, removed after each bake
 RECORD_VERSION = 2
 RENDERED_TYPES = {"MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES", "POINTCLOUD", "VOLUME"}
 # Object settings that change what Cycles' bake sees of an object (ray visibility and kind).
@@ -187,15 +188,26 @@ def status(scene, obj, scene_print=None, depsgraph=None):
                   f"{info.get('seconds')} s")
 
 
+def has_transfer(obj):
+    """True if ``obj`` holds anything of a bake: its record or one of the attributes."""
+    if obj.get(RECORD) is not None:
+        return True
+    return obj.type == "MESH" and any(
+        obj.data.color_attributes.get(n) is not None for n in ATTRIBUTE_NAMES + (SCRATCH_NAME,))
+
+
 def remove_transfer(obj):
-    """Delete the bake's attributes and record from ``obj``; True if there was one."""
+    """Delete the bake's attributes (the scratch one of an interrupted bake too) and record
+    from ``obj``; True if there was any."""
     found = obj.get(RECORD) is not None
     if RECORD in obj:
         del obj[RECORD]
     if obj.type == "MESH":
-        for name in ATTRIBUTE_NAMES:
+        for name in ATTRIBUTE_NAMES + (SCRATCH_NAME,):
             attribute = obj.data.color_attributes.get(name)
             if attribute is not None:
                 obj.data.color_attributes.remove(attribute)
                 found = True
+        if found:
+            obj.data.update()
     return found

@@ -303,6 +303,10 @@ class SHLIGHT_OT_remove(bpy.types.Operator):
         if widened:
             message += (f", {len(widened)} of them beyond the selection: the world lights "
                         "diffuse surfaces again, for the whole scene")
+        baked = transfer_apply.delete_bakes(
+            objects_for_target(context, scene.sh_lighting.apply_target), result.changed)
+        if baked:
+            message += f"; the transfer bake of {len(baked)} object(s) deleted"
         if not any(materials.is_applied(m) for m in file_materials()):
             # The world lights everything again: Extract Lights' lamps would light it twice
             deleted = design_compute.take_lights_back(scene)

@@ -151,13 +151,13 @@ class SHLIGHT_OT_delete_transfer(bpy.types.Operator):
     def poll(cls, context):
         if not scene_poll(cls, context):
             return False
-        if not any(bake.record(o) for o in _selected_meshes(context)):
+        if not any(bake.has_transfer(o) for o in _selected_meshes(context)):
             cls.poll_message_set("No selected object has a transfer bake")
             return False
         return True
 
     def execute(self, context):
-        objects = [o for o in _selected_meshes(context) if bake.record(o)]
+        objects = [o for o in _selected_meshes(context) if bake.has_transfer(o)]
         transfer_apply.remove_transfer_from(materials_of(objects))
         for obj in objects:
             bake.remove_transfer(obj)

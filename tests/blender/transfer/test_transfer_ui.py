@@ -117,6 +117,8 @@ def test_each_remove_restores_only_the_emission_sampling_it_changed(addon):
     assert material.cycles.emission_sampling == "NONE"
     assert bpy.ops.shlight.remove() == {"FINISHED"}  # the plain Remove
     assert material.cycles.emission_sampling == "FRONT"
+    assert bake.record(ground) is None  # Remove deletes the bake with the lighting
+    bake.bake_transfer(scene, [ground, box], samples=1)
     assert bpy.ops.shlight.apply() == {"FINISHED"}
     assert bpy.ops.shlight.apply_transfer() == {"FINISHED"}  # over the plain Apply
     assert material.cycles.emission_sampling == "NONE"
