@@ -74,10 +74,26 @@ def test_polls_say_why(addon):
 def test_bake_refusal_is_reported_and_changes_nothing(addon):
     scene, ground, box = _scene()
     box.modifiers.new("Subdivision", "SUBSURF")
-    _select([ground, box])
+    _select([box])
     with pytest.raises(RuntimeError, match="'Box' has modifiers \\(Subdivision\\)"):
         bpy.ops.shlight.bake_transfer(samples=8)
-    assert bake.record(ground) is None and not ground.data.color_attributes
+    assert bake.record(box) is None and not box.data.color_attributes
+
+
+def test_the_dialog_tells_refusals_and_cost_before_ok_and_the_others_are_baked(addon):
+    scene, ground, box = _scene()
+    box.modifiers.new("Subdivision", "SUBSURF")
+    lines = transfer_ui.dialog_lines(scene, [ground, box], samples=64)
+    texts = [text for _icon, text in lines]
+    assert ("ERROR", "Not baked: 'Box' has modifiers (Subdivision): the transfer is stored on "
+            "the mesh itself, so apply them (or disable them for renders) and bake again"
+            ) in lines, texts
+    cost = [t for t in texts if t.startswith("Bakes 1 object(s): 25 vertices, 64 samples, about")]
+    assert cost and cost[0].endswith(" s"), texts
+    _select([ground, box])
+    assert bpy.ops.shlight.bake_transfer(samples=8) == {"FINISHED"}
+    assert bake.record(ground) is not None and bake.record(box) is None
+    assert not box.data.color_attributes
 
 
 @pytest.mark.slow

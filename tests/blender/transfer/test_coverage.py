@@ -1,0 +1,38 @@
+"""Whether a receiving mesh has corners where the shadows fall (``blender/transfer/coverage``):
+a plain 4-vertex floor under a cube gets no contact shadow per corner, and the bake says so,
+with what to do; a floor gridded finely enough is not warned about."""
+
+import bmesh
+import bpy
+
+import transfer_scenes as ts
+from sh_lighting.blender.transfer import bake, coverage
+
+
+def _floor_and_cube(cuts):
+    floor = ts.mesh_object("Floor", lambda bm: bmesh.ops.create_grid(
+        bm, x_segments=cuts, y_segments=cuts, size=4.0))
+    cube = ts.mesh_object("Cube", lambda bm: bmesh.ops.create_cube(bm, size=1.0),
+                          (0.5, 0.0, 0.5))
+    bpy.context.view_layer.update()
+    return floor, cube
+
+
+def test_a_plain_floor_under_a_cube_is_warned_about_with_what_to_do():
+    floor, cube = _floor_and_cube(1)  # the 4-vertex plane artists use
+    assert len(floor.data.vertices) == 4
+    scene = bpy.context.scene
+    warnings = coverage.coarse_receivers(scene, [floor, cube])
+    assert len(warnings) == 1, warnings
+    text = warnings[0]
+    assert text.startswith("'Floor' is too coarse for the shadow 'Cube' casts on it: 0 of its "
+                           "vertices lie within "), text
+    assert "subdivide it to edges of about 0.25 m" in text and "\n" not in text
+    info = bake.bake_transfer(scene, [floor, cube], samples=1)
+    assert warnings[0] in info.notes
+    assert bake.record(floor)["coarse"] == warnings
+
+
+def test_a_floor_gridded_finely_enough_is_not_warned_about():
+    floor, cube = _floor_and_cube(32)  # 0.25 m edges
+    assert coverage.coarse_receivers(bpy.context.scene, [floor, cube]) == []
