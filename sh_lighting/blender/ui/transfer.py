@@ -70,11 +70,27 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
         return True
 
     def invoke(self, context, event):
-        return context.window_manager.invoke_props_dialog(self)
+        return context.window_manager.invoke_props_dialog(self, width=420)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.prop(self, "samples")
+        row = layout.row()
+        row.prop(self, "use_error_target")
+        sub = row.row()
+        sub.active = self.use_error_target
+        sub.prop(self, "error_target")
+        for icon, text in dialog_lines(context.scene, _selected_meshes(context), self.samples):
+            panels.wrapped(layout, context, text, icon=icon)
 
     def execute(self, context):
-        objects = _selected_meshes(context)
         quiet_image_library()
+        selected = _selected_meshes(context)
+        objects = [o for o in selected if bake.refusal(context.scene, o) is None]
+        skipped = [(o.name, bake.refusal(context.scene, o)) for o in selected if o not in objects]
+        if not objects:  # nothing to bake: the first reason, as the bake itself gives it
+            objects = selected
+            skipped = []
         try:
             target = self.error_target / 100.0 if self.use_error_target else None
             info = bake.bake_transfer(context.scene, objects, self.samples,
@@ -88,9 +104,26 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
             f"Baked the transfer of {len(info.objects)} object(s): {info.vertices} vertices, "
             f"{info.corners} corners, {info.samples} samples, {info.seconds:.1f} s "
             f"({per_10k:.1f} s per 10k vertices)"))
+        for _name, reason in skipped:
+            self.report({"WARNING"}, f"Not baked: {reason}")
         for note in info.notes:
             self.report({"WARNING"}, note)
         return {"FINISHED"}
+
+
+def dialog_lines(scene, objects, samples):
+    """What the Bake dialog says before OK: [(icon, text)] the objects it cannot bake (why,
+    what to do), the cost (objects, vertices, estimated seconds) and coarse receivers."""
+    plan = bake.plan(scene, objects, samples)
+    lines = [("ERROR", f"Not baked: {reason}") for _name, reason in plan.refused]
+    if plan.objects:
+        lines.append(("TIME", (
+            f"Bakes {len(plan.objects)} object(s): {plan.vertices} vertices, {samples} "
+            f"samples, about {plan.seconds:.0f} s")))
+    else:
+        lines.append(("ERROR", "Nothing to bake: select meshes that can be baked"))
+    lines.extend(("INFO", line) for line in plan.coarse)
+    return lines
 
 
 class SHLIGHT_OT_apply_transfer(bpy.types.Operator):
@@ -178,6 +211,7 @@ def transfer_lines(scene, active):
     if active is not None and active.name in states:
         state, message = states[active.name]
         lines.append(("ERROR" if state == "STALE" else "CHECKMARK", message))
+        lines.extend(("INFO", line) for line in bake.record(active).get("coarse", ()))
     lines.append(("ERROR" if stale else "INFO",
                   f"{len(baked)} baked, {len(stale)} stale"
                   + (f": {', '.join(stale[:3])}" if stale else "")))

@@ -274,10 +274,11 @@ def test_sh_emission_in_materials_is_not_baked_as_light():
     api.apply_to_materials([material], scene, "KEEP_BSDF")
     info = _bake([ground, box], samples=16)
     kept = np.array([d.color[:] for d in ground.data.color_attributes["sh_T00"].data])
-    assert info.notes == [] and np.abs(kept - plain).max() < 1e-6
+    notes = [n for n in info.notes if "too coarse" not in n]  # the 2 × 2 ground is coarse
+    assert notes == [] and np.abs(kept - plain).max() < 1e-6
     api.apply_to_materials([material], scene, "EMISSION")
     info = _bake([ground, box], samples=16)
-    assert info.notes == ["materials in Emission mode reflect no light into the bake: Grey"]
+    assert info.notes[0] == "materials in Emission mode reflect no light into the bake: Grey"
     assert not any(n.mute for n in material.node_tree.nodes)
 
 
