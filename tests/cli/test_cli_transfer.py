@@ -1,9 +1,15 @@
 """``bake-transfer`` on the command line, in its own process: bakes, applies, saves; a
 refusal is one line and leaves no file."""
 
+import os
+import signal
+import subprocess
+import sys
+import time
+
 import bpy
 import pytest
-from cli_runs import run
+from cli_runs import HOME, ROOT, run
 
 import transfer_scenes as ts
 from sh_lighting.blender.transfer import bake, nodes
@@ -59,3 +65,45 @@ def test_bake_transfer_help_lists_its_options():
                  "--apply", "--mode"):
         assert word in result.stdout
     assert "bake-transfer" in run("--help").stdout
+
+
+def start(*args):
+    """The command line in its own process, not waited for (its output in pipes)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "HOME": HOME,
+           "BLENDER_USER_RESOURCES": os.path.join(HOME, "blender")}
+    return subprocess.Popen([sys.executable, "-m", "sh_lighting", *map(str, args)], cwd=ROOT,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum, in_place", [(signal.SIGINT, False), (signal.SIGTERM, True)])
+def test_an_interrupted_bake_stops_at_once_one_line_and_the_file_untouched(tmp_path, signum,
+                                                                           in_place):
+    """Cycles' bake swallowed the KeyboardInterrupt (a traceback) and baked every remaining
+    basis (17-29 s) before "interrupted"."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    ts.ground_and_box(60, 10)  # 17304 corners: 1.5 s a basis at 64 samples (load 9)
+    blend = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    before = blend.read_bytes()
+    out = tmp_path / "baked.blend"
+    process = start("bake-transfer", blend, "--samples", "128",
+                    *(("--in-place",) if in_place else ("--out", out)))
+    lines = []
+    while not any(line.startswith("Transfer L00") for line in lines):
+        line = process.stdout.readline()
+        assert line, (lines, process.stderr.read())
+        lines.append(line)
+    time.sleep(0.3)  # inside the next basis' bake
+    assert process.poll() is None
+    sent = time.monotonic()
+    process.send_signal(signum)
+    stdout, stderr = process.communicate(timeout=120)
+    stopped = time.monotonic() - sent
+    assert process.returncode == 128 + signum, (stdout, stderr)
+    assert stopped < 2.0, stopped
+    ours = [line for line in stderr.splitlines() if not line.startswith("OIIO")]
+    assert ours == ["sh_lighting: interrupted"], stderr
+    assert "Transfer L1-1" not in stdout and "Saved" not in stdout
+    assert blend.read_bytes() == before and not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.blend"]
