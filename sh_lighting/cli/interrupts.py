@@ -8,9 +8,15 @@ So the handlers are installed before anything else, the two signals are held
 (blocked, not lost) while bpy loads and our handlers are installed again before they are let
 through, and ``check`` is called before each final move into place, in case the signal was
 taken while Blender ran Python code of its own that ignores exceptions.
+
+Work inside Blender's C code that swallows the KeyboardInterrupt (Cycles' bake prints it and
+goes on baking) runs under ``at_once``: the signal ends the process within milliseconds.
 """
 
+import os
+import shutil
 import signal
+import sys
 import threading
 from contextlib import contextmanager
 
@@ -47,6 +53,58 @@ def held():
         if blocked:
             install()
             signal.pthread_sigmask(signal.SIG_UNBLOCK, SIGNALS)
+
+
+def _note(signum, frame):
+    if not _received:
+        _received.append(signum)
+
+
+@contextmanager
+def at_once():
+    """During the block, SIGINT or SIGTERM end the process at once: the line ``sh_lighting:
+    interrupted``, Blender's session temp folder removed, exit 128 + the signal's number.
+
+    For work that writes nothing the user keeps (a bake into memory) inside C code that would
+    not stop for a KeyboardInterrupt: Python's C-level handler writes the signal's number to a
+    pipe (``signal.set_wakeup_fd``) even while the main thread is in Cycles, and a thread
+    waiting on it ends the process (``os._exit``: nothing else runs, no traceback). A signal
+    that comes as the block ends is delivered after it, as a KeyboardInterrupt.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    bpy = sys.modules.get("bpy")
+    tempdir = getattr(getattr(bpy, "app", None), "tempdir", "") if bpy else ""
+    read, write = os.pipe()
+    os.set_blocking(write, False)
+    done = threading.Event()
+
+    def watch():
+        data = os.read(read, 1)
+        if done.is_set() or not data:
+            return
+        print("sh_lighting: interrupted", file=sys.stderr, flush=True)
+        if tempdir and os.path.basename(os.path.normpath(tempdir)).startswith("blender_"):
+            shutil.rmtree(tempdir, ignore_errors=True)
+        os._exit(128 + data[0])
+
+    watcher = threading.Thread(target=watch, name="sh_lighting interrupts", daemon=True)
+    watcher.start()
+    previous_fd = signal.set_wakeup_fd(write, warn_on_full_buffer=False)
+    for signum in SIGNALS:
+        signal.signal(signum, _note)
+    try:
+        yield
+    finally:
+        done.set()
+        signal.set_wakeup_fd(previous_fd)
+        install()
+        os.write(write, b"\0")  # ends the watcher
+        watcher.join()
+        os.close(read)
+        os.close(write)
+        check()
 
 
 def import_bpy():

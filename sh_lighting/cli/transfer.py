@@ -2,6 +2,7 @@
 baked by Cycles (``blender.transfer``), optionally applied to their materials, saved to a new
 file or in place."""
 
+from . import interrupts
 from .apply import objects_to_apply
 from .options import add_blend_output, add_mode, add_scene, positive
 from .report import CommandError, say
@@ -51,8 +52,9 @@ def run(args):
         objects = [o for o in scene.objects if o.type == "MESH" and not o.hide_render]
     try:
         target = None if args.error_target is None else args.error_target / 100.0
-        info = api.bake_transfer(scene, objects, samples=args.samples, report=say,
-                                 error_target=target)
+        with interrupts.at_once():  # Cycles' bake would swallow a KeyboardInterrupt
+            info = api.bake_transfer(scene, objects, samples=args.samples, report=say,
+                                     error_target=target)
     except api.TransferError as error:
         raise CommandError(f"{error}; nothing saved") from None
     per_10k = info.seconds / max(info.vertices, 1) * 1e4
