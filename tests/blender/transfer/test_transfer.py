@@ -301,3 +301,28 @@ def test_error_target_chooses_the_samples_for_that_noise():
     assert 0.01 < noise < 0.025, noise
     with pytest.raises(bake.TransferError, match="error target 2: use a fraction"):
         bake.bake_transfer(scene, [ground], error_target=2)
+
+
+def test_a_bake_in_steps_can_stop_between_them_and_sees_an_edit_meanwhile():
+    """What the window's modal bake runs: one basis world per step, the user's scene as it
+    was between steps; cancel (Esc) stores nothing; an edit between steps stores nothing."""
+    scene, ground, box = _scene(2, 0)
+    scene.render.engine = "BLENDER_WORKBENCH"
+    world = scene.world
+    job = bake.Bake(scene, [ground, box], samples=1)
+    assert (job.steps, job.done) == (9, 0)
+    job.step()
+    assert job.done == 1 and scene.world == world
+    assert scene.render.engine == "BLENDER_WORKBENCH"
+    assert bake.SCRATCH_NAME not in ground.data.color_attributes
+    job.cancel()
+    assert bake.record(ground) is None and not ground.data.color_attributes
+    job = bake.Bake(scene, [ground, box], samples=1)
+    for _ in range(4):
+        job.step()
+    box.location.x += 0.3
+    while job.done < job.steps:
+        job.step()
+    with pytest.raises(bake.TransferError, match="the scene changed during the bake"):
+        job.finish()
+    assert bake.record(ground) is None and not ground.data.color_attributes
