@@ -157,69 +157,115 @@ def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None, error_ta
     (nothing changed) if an object cannot be baked or ``samples`` is not a whole number in
     1 … MAX_SAMPLES.
     """
-    picked = check_objects(scene, objects)
-    report = report or (lambda text: None)
-    started = time.perf_counter()
-    chosen = None
-    if error_target is not None:
-        samples, probe_noise = choose_samples(scene, picked, error_target)
-        chosen = (f"{samples} samples chosen for a noise of {100 * error_target:.2g} % "
-                  f"(measured {100 * probe_noise:.2g} % at 16 samples)")
-        report(chosen)
-    if isinstance(samples, bool) or not isinstance(samples, int) or not 1 <= samples <= MAX_SAMPLES:
-        raise TransferError(f"samples is {samples!r}: use a whole number from 1 to {MAX_SAMPLES}")
-    saved = _Saved(scene, picked)
+    job = Bake(scene, objects, samples, report, error_target)
     window_manager = bpy.context.window_manager
-    bakes, basis_seconds = [], []
-    notes = [chosen] if chosen else []
+    if window_manager is not None:
+        window_manager.progress_begin(0, job.steps)
     try:
-        saved.prepare(samples)
-        if saved.emission_materials:
-            notes.append(
-                "materials in Emission mode reflect no light into the bake: "
-                + ", ".join(sorted(saved.emission_materials))
-            )
-        if window_manager is not None:
-            window_manager.progress_begin(0, len(ATTRIBUTE_NAMES))
-        for index in range(len(ATTRIBUTE_NAMES)):
-            began = time.perf_counter()
-            bakes.append(_bake_basis(scene, saved, picked, index))
-            basis_seconds.append(time.perf_counter() - began)
-            report(
-                f"Transfer {COEFFICIENT_NAMES[index]}: {basis_seconds[-1]:.1f} s "
-                f"({index + 1}/9)"
-            )
+        while job.done < job.steps:
+            job.step()
             if window_manager is not None:
-                window_manager.progress_update(index + 1)
+                window_manager.progress_update(job.done)
     finally:
         if window_manager is not None:
             window_manager.progress_end()
-        saved.restore()
-    seconds = time.perf_counter() - started
-    corners = vertices = 0
-    for position, obj in enumerate(picked):
-        transfer = _transfer([bake[position] for bake in bakes])
-        bad = int(np.count_nonzero(~np.isfinite(transfer)))
-        if bad:
-            transfer = np.nan_to_num(transfer, nan=0.0, posinf=0.0, neginf=0.0)
-            notes.append(f"'{obj.name}': {bad} values were not finite (degenerate faces?), set to 0")
-        _store(obj, transfer)
-        corners += len(obj.data.loops)
-        vertices += len(obj.data.vertices)
-        obj.data.update()
-    depsgraph = evaluated_depsgraph(scene)
-    scene_print = scene_fingerprint(scene, depsgraph)
-    coarse = coverage.coarse_receivers(scene, picked, depsgraph)
-    notes.extend(coarse)
-    for obj in picked:
-        obj[RECORD] = json.dumps({
-            "version": RECORD_VERSION, "samples": samples, "seconds": round(seconds, 3),
-            "corners": corners, "baked": time.time(),
-            "geometry": geometry_fingerprint(obj, depsgraph), "scene": scene_print,
-            "coarse": [line for line in coarse if line.startswith(f"'{obj.name}' ")],
-        })
-    return BakeInfo([o.name for o in picked], corners, vertices, samples, seconds,
-                    basis_seconds, notes)
+    return job.finish()
+
+
+class Bake:
+    """A bake in ``steps`` steps, one basis world each, the user's scene as it was between
+    them: a window's modal operator draws its progress and takes Esc between steps (Cycles'
+    bake itself cannot be stopped from Python). ``finish`` stores the transfer, unless the
+    scene changed meanwhile; ``cancel`` drops what was baked. Nothing is stored before
+    ``finish``."""
+
+    steps = len(ATTRIBUTE_NAMES)
+
+    def __init__(self, scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None):
+        self.scene = scene
+        self.picked = check_objects(scene, objects)
+        self.report = report or (lambda text: None)
+        self.started = time.perf_counter()
+        self.notes = []
+        if error_target is not None:
+            samples, probe_noise = choose_samples(scene, self.picked, error_target)
+            chosen = (f"{samples} samples chosen for a noise of {100 * error_target:.2g} % "
+                      f"(measured {100 * probe_noise:.2g} % at 16 samples)")
+            self.notes.append(chosen)
+            self.report(chosen)
+        if (isinstance(samples, bool) or not isinstance(samples, int)
+                or not 1 <= samples <= MAX_SAMPLES):
+            raise TransferError(
+                f"samples is {samples!r}: use a whole number from 1 to {MAX_SAMPLES}")
+        self.samples = samples
+        self.scene_print = scene_fingerprint(scene)
+        self.bakes, self.basis_seconds = [], []
+        self.emission_materials = set()
+
+    @property
+    def done(self):
+        return len(self.bakes)
+
+    def step(self):
+        """Bake the next basis world (the scene prepared for it and restored after)."""
+        index = self.done
+        began = time.perf_counter()
+        saved = _Saved(self.scene, self.picked)
+        try:
+            saved.prepare(self.samples)
+            self.emission_materials |= saved.emission_materials
+            self.bakes.append(_bake_basis(self.scene, saved, self.picked, index))
+        finally:
+            saved.restore()
+        self.basis_seconds.append(time.perf_counter() - began)
+        self.report(f"Transfer {COEFFICIENT_NAMES[index]}: {self.basis_seconds[-1]:.1f} s "
+                    f"({index + 1}/{self.steps})")
+
+    def cancel(self):
+        self.bakes.clear()
+
+    def finish(self):
+        """Store the transfer and the records; a ``BakeInfo``. A TransferError (nothing
+        stored) if a step is missing or the scene changed since the bake began."""
+        if self.done != self.steps:
+            raise TransferError(f"the bake is not complete ({self.done}/{self.steps}): bake again")
+        scene, picked, notes = self.scene, self.picked, list(self.notes)
+        try:
+            changed = scene_fingerprint(scene) != self.scene_print
+        except ReferenceError:  # an object was deleted
+            changed = True
+        if changed:
+            self.cancel()
+            raise TransferError("the scene changed during the bake: nothing stored; bake again")
+        if self.emission_materials:
+            notes.append("materials in Emission mode reflect no light into the bake: "
+                         + ", ".join(sorted(self.emission_materials)))
+        seconds = time.perf_counter() - self.started
+        corners = vertices = 0
+        for position, obj in enumerate(picked):
+            transfer = _transfer([bake[position] for bake in self.bakes])
+            bad = int(np.count_nonzero(~np.isfinite(transfer)))
+            if bad:
+                transfer = np.nan_to_num(transfer, nan=0.0, posinf=0.0, neginf=0.0)
+                notes.append(
+                    f"'{obj.name}': {bad} values were not finite (degenerate faces?), set to 0")
+            _store(obj, transfer)
+            corners += len(obj.data.loops)
+            vertices += len(obj.data.vertices)
+            obj.data.update()
+        depsgraph = evaluated_depsgraph(scene)
+        scene_print = scene_fingerprint(scene, depsgraph)
+        coarse = coverage.coarse_receivers(scene, picked, depsgraph)
+        notes.extend(coarse)
+        for obj in picked:
+            obj[RECORD] = json.dumps({
+                "version": RECORD_VERSION, "samples": self.samples, "seconds": round(seconds, 3),
+                "corners": corners, "baked": time.time(),
+                "geometry": geometry_fingerprint(obj, depsgraph), "scene": scene_print,
+                "coarse": [line for line in coarse if line.startswith(f"'{obj.name}' ")],
+            })
+        return BakeInfo([o.name for o in picked], corners, vertices, self.samples, seconds,
+                        self.basis_seconds, notes)
 
 
 def choose_samples(scene, objects, error_target, probe=16):
