@@ -50,12 +50,27 @@ def test_bake_transfer_bakes_applies_and_saves(tmp_path):
 def test_bake_transfer_refusal_is_one_line_and_saves_nothing(tmp_path):
     blend = _blend(tmp_path / "scene.blend", modifier=True)
     out = tmp_path / "baked.blend"
-    result = run("bake-transfer", blend, "--error-target", "2", "--out", out, timeout=300)
+    result = run("bake-transfer", blend, "--objects", "Ground", "Box", "--error-target", "2",
+                 "--out", out, timeout=300)
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == [
         "sh_lighting: error: 'Box' has modifiers (Bevel): the transfer is stored on the mesh "
         "itself, so apply them (or disable them for renders) and bake again; nothing saved"]
     assert not out.exists()
+
+
+def test_bake_transfer_of_the_whole_scene_skips_what_it_cannot_bake(tmp_path):
+    blend = _blend(tmp_path / "scene.blend", modifier=True)
+    out = tmp_path / "baked.blend"
+    result = run("bake-transfer", blend, "--samples", "1", "--out", out, timeout=300)
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert ("skipped: 'Box' has modifiers (Bevel): the transfer is stored on the mesh itself, "
+            "so apply them (or disable them for renders) and bake again") in lines
+    assert any(line.startswith("Baked the transfer of 1 object(s) (Ground):") for line in lines)
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    assert bake.record(bpy.data.objects["Ground"]) is not None
+    assert bake.record(bpy.data.objects["Box"]) is None
 
 
 def test_bake_transfer_help_lists_its_options():
