@@ -87,7 +87,8 @@ __all__ = [
     "materials_of", "objects_without_material", "shared_scene_notes", "HDRI_ERROR_NORMALS",
     "hdri_lights", "hdri_metadata", "read_hdri",
     # precomputed radiance transfer (shadows and bounce light)
-    "TransferError", "bake_transfer", "transfer_status", "apply_transfer", "delete_transfer",
+    "TransferError", "bake_transfer", "transfer_refusal", "transfer_status", "apply_transfer",
+    "delete_transfer",
     # lighting from a photo of a grey ball
     "coefficients_from_photo", "photo_exposure", "SecondPhoto", "detect_photo_ball",
 ]
@@ -106,6 +107,11 @@ def bake_transfer(scene, objects, samples=_transfer.DEFAULT_SAMPLES, report=prin
     notes); a ``TransferError`` (nothing changed) for objects that cannot be baked
     (modifiers, linked duplicates, no faces, not meshes, hidden)."""
     return _transfer.bake_transfer(scene, objects, samples, report, error_target)
+
+
+def transfer_refusal(scene, obj):
+    """Why ``obj`` cannot be transfer-baked in ``scene`` (one line with what to do), or None."""
+    return _transfer.refusal(scene, obj)
 
 
 def transfer_status(scene, obj):

@@ -24,7 +24,8 @@ def add_arguments(p, prog):
                    help=".blend file to bake (under blender -P: default the open one)")
     add_blend_output(p)
     p.add_argument("--objects", nargs="+", metavar="NAME",
-                   help="the meshes to bake (default: every mesh the scene renders)")
+                   help="the meshes to bake (default: every mesh the scene renders, those "
+                   "that cannot be baked skipped with the reason)")
     p.add_argument("--samples", type=positive, default=DEFAULT_SAMPLES,
                    help=f"Cycles samples per corner and basis function (default "
                    f"{DEFAULT_SAMPLES}; the noise falls as 1/sqrt(samples))")
@@ -48,8 +49,16 @@ def run(args):
     scene = pick_scene(args.scene)
     if args.objects:
         objects = objects_to_apply(scene, args.objects)
-    else:
-        objects = [o for o in scene.objects if o.type == "MESH" and not o.hide_render]
+    else:  # every mesh the scene renders; those that cannot be baked are said and skipped
+        objects = []
+        for obj in (o for o in scene.objects if o.type == "MESH" and not o.hide_render):
+            reason = api.transfer_refusal(scene, obj)
+            if reason is None:
+                objects.append(obj)
+            else:
+                say(f"skipped: {reason}")
+        if not objects:
+            raise CommandError("no mesh of the scene can be baked (see above); nothing saved")
     try:
         target = None if args.error_target is None else args.error_target / 100.0
         with interrupts.at_once():  # Cycles' bake would swallow a KeyboardInterrupt
