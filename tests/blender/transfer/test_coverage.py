@@ -36,3 +36,18 @@ def test_a_plain_floor_under_a_cube_is_warned_about_with_what_to_do():
 def test_a_floor_gridded_finely_enough_is_not_warned_about():
     floor, cube = _floor_and_cube(32)  # 0.25 m edges
     assert coverage.coarse_receivers(bpy.context.scene, [floor, cube]) == []
+
+
+def test_an_occluder_inside_the_receivers_box_but_away_from_its_faces_is_not_counted():
+    """Two dense patches 6 m apart (one mesh) with a cube between them: the cube's shadow
+    falls on neither."""
+    def patches(bm):
+        for x in (-3.0, 3.0):
+            grid = bmesh.ops.create_grid(bm, x_segments=8, y_segments=8, size=0.5)
+            bmesh.ops.translate(bm, verts=grid["verts"], vec=(x, 0.0, 0.0))
+
+    ts.mesh_object("Patches", patches)
+    ts.mesh_object("Cube", lambda bm: bmesh.ops.create_cube(bm, size=1.0), (0.0, 0.0, 0.5))
+    bpy.context.view_layer.update()
+    receiver = bpy.data.objects["Patches"]
+    assert coverage.coarse_receivers(bpy.context.scene, [receiver]) == []
