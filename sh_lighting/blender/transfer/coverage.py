@@ -3,11 +3,12 @@
 The transfer is stored per face corner and interpolated across each face, so a shadow shows
 only where the receiver has vertices: a plain 4-vertex floor under a cube keeps its four far
 corners unoccluded and gets no contact shadow at all. An occluder of size s (the largest side
-of its bounding box) darkens its surroundings up to about s/2 from it; with fewer than
-``MIN_VERTICES`` of the receiver's vertices in that reach, the shadow falls between them and
-the receiver is called too coarse, with the edge length that resolves it (s/4, four edges
-across the occluder). Only occluders at most half the receiver's size count (a local shadow:
-the floor under a cube darkens the cube's sides smoothly, which its corners can carry).
+of its bounding box) darkens its surroundings up to about s/2 from it; where a face of the
+receiver passes there (the separating axis test) but fewer than ``MIN_VERTICES`` of its
+vertices do, the shadow falls between them: the receiver is called too coarse, with the edge
+length that resolves it (s/4, four edges across the occluder). Only occluders at most half
+the receiver's size count (a local shadow: the floor under a cube darkens the cube's sides
+smoothly, which its corners can carry).
 """
 
 import bpy
@@ -28,13 +29,39 @@ def _world_box(obj, depsgraph):
     return world[:, :3].min(axis=0), world[:, :3].max(axis=0)
 
 
-def _world_vertices(obj, depsgraph):
+def _world_mesh(obj, depsgraph):
+    """(vertices (n, 3), triangles (m, 3) vertex indices) of ``obj`` in world space."""
     evaluated = obj.evaluated_get(depsgraph) if depsgraph is not None else obj
     mesh = evaluated.data if isinstance(evaluated.data, bpy.types.Mesh) else obj.data
     coordinates = np.empty(len(mesh.vertices) * 3, dtype=float)
     mesh.vertices.foreach_get("co", coordinates)
     matrix = np.array(evaluated.matrix_world, dtype=float)
-    return coordinates.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
+    vertices = coordinates.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
+    mesh.calc_loop_triangles()
+    triangles = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int64)
+    mesh.loop_triangles.foreach_get("vertices", triangles)
+    return vertices, triangles.reshape(-1, 3)
+
+
+def _touches_box(triangles, low, high):
+    """Whether any of ``triangles`` (m, 3, 3) meets the box ``low``-``high`` (the separating
+    axis test of Akenine-Möller 2001: the box's axes, the triangle's normal, the nine edge
+    crossings)."""
+    centre, half = (low + high) / 2.0, (high - low) / 2.0
+    points = triangles - centre
+    near = np.all((points.min(axis=1) <= half) & (points.max(axis=1) >= -half), axis=1)
+    points = points[near]
+    if len(points) == 0:
+        return False
+    edges = [points[:, 1] - points[:, 0], points[:, 2] - points[:, 1], points[:, 0] - points[:, 2]]
+    axes = [np.cross(edges[0], edges[1])]
+    axes += [np.cross(np.eye(3)[i], edge) for i in range(3) for edge in edges]
+    inside = np.ones(len(points), dtype=bool)
+    for axis in axes:
+        projected = np.einsum("mkj,mj->mk", points, axis)
+        radius = np.abs(axis) @ half
+        inside &= (projected.min(axis=1) <= radius) & (projected.max(axis=1) >= -radius)
+    return bool(inside.any())
 
 
 def coarse_receivers(scene, receivers, depsgraph=None):
@@ -49,7 +76,7 @@ def coarse_receivers(scene, receivers, depsgraph=None):
     for receiver in receivers:
         if receiver.type != "MESH" or len(receiver.data.vertices) == 0:
             continue
-        vertices = _world_vertices(receiver, depsgraph)
+        vertices, triangles = _world_mesh(receiver, depsgraph)
         low, high = vertices.min(axis=0), vertices.max(axis=0)
         receiver_size = float((high - low).max())
         worst = None
@@ -64,6 +91,8 @@ def coarse_receivers(scene, receivers, depsgraph=None):
             near_low, near_high = box_low - reach, box_high + reach
             if (near_low > high).any() or (near_high < low).any():
                 continue  # too far from the receiver to shadow it
+            if not _touches_box(vertices[triangles], near_low, near_high):
+                continue  # none of the receiver's faces passes where the shadow falls
             inside = np.all((vertices >= near_low) & (vertices <= near_high), axis=1)
             count = int(np.count_nonzero(inside))
             if count < MIN_VERTICES and (worst is None or (count, size) < worst[:2]):
