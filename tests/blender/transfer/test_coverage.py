@@ -51,3 +51,14 @@ def test_an_occluder_inside_the_receivers_box_but_away_from_its_faces_is_not_cou
     bpy.context.view_layer.update()
     receiver = bpy.data.objects["Patches"]
     assert coverage.coarse_receivers(bpy.context.scene, [receiver]) == []
+
+
+def test_a_dense_mesh_grazing_an_occluders_reach_is_not_warned_about():
+    """Suzanne beside a sphere: a few of her faces cross the edge of the sphere's reach with
+    no vertex inside it; her faces are small, so the shadow is carried."""
+    ts.mesh_object("Sphere", lambda bm: bmesh.ops.create_uvsphere(
+        bm, u_segments=32, v_segments=16, radius=0.5), (0.2, 1.2, 0.5))
+    monkey = ts.mesh_object("Suzanne", lambda bm: bmesh.ops.create_monkey(bm), (1.2, -0.6, 0.45))
+    monkey.rotation_euler = (0.0, 0.0, 0.5)
+    bpy.context.view_layer.update()
+    assert coverage.coarse_receivers(bpy.context.scene, [monkey]) == []
