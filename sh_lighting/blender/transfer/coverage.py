@@ -3,9 +3,9 @@
 The transfer is stored per face corner and interpolated across each face, so a shadow shows
 only where the receiver has vertices: a plain 4-vertex floor under a cube keeps its four far
 corners unoccluded and gets no contact shadow at all. An occluder of size s (the largest side
-of its bounding box) darkens its surroundings up to about s/2 from it; where a face of the
-receiver passes there (the separating axis test) but fewer than ``MIN_VERTICES`` of its
-vertices do, the shadow falls between them: the receiver is called too coarse, with the edge
+of its bounding box) darkens its surroundings most within about s/4 of it; where the faces of
+the receiver that pass there (the separating axis test) have a median longest edge over s/2,
+the shadow falls between their corners: the receiver is called too coarse, with the edge
 length that resolves it (s/4, four edges across the occluder). Only occluders at most half
 the receiver's size count (a local shadow: the floor under a cube darkens the cube's sides
 smoothly, which its corners can carry).
@@ -16,8 +16,8 @@ import numpy as np
 
 from .stale import RENDERED_TYPES, rendered_objects, view_layer_of
 
-MIN_VERTICES = 16  # about 4 × 4 vertices across the contact region
-REACH = 0.5  # the contact region reaches this fraction of the occluder's size around it
+COARSE = 0.5  # faces whose longest edge exceeds this fraction of the occluder's size
+REACH = 0.25  # the contact shadow: this fraction of the occluder's size around it
 EDGES_ACROSS = 4  # the suggested edge: the occluder's size over this
 LOCAL = 0.5  # occluders at most this fraction of the receiver's size cast a local shadow
 
@@ -43,16 +43,14 @@ def _world_mesh(obj, depsgraph):
     return vertices, triangles.reshape(-1, 3)
 
 
-def _touches_box(triangles, low, high):
-    """Whether any of ``triangles`` (m, 3, 3) meets the box ``low``-``high`` (the separating
-    axis test of Akenine-Möller 2001: the box's axes, the triangle's normal, the nine edge
-    crossings)."""
+def _touching(triangles, low, high):
+    """Which of ``triangles`` (m, 3, 3) meet the box ``low``-``high`` (the separating axis
+    test of Akenine-Möller 2001: the box's axes, the triangle's normal, the nine edge
+    crossings); a boolean mask."""
     centre, half = (low + high) / 2.0, (high - low) / 2.0
     points = triangles - centre
-    near = np.all((points.min(axis=1) <= half) & (points.max(axis=1) >= -half), axis=1)
-    points = points[near]
-    if len(points) == 0:
-        return False
+    mask = np.all((points.min(axis=1) <= half) & (points.max(axis=1) >= -half), axis=1)
+    points = points[mask]
     edges = [points[:, 1] - points[:, 0], points[:, 2] - points[:, 1], points[:, 0] - points[:, 2]]
     axes = [np.cross(edges[0], edges[1])]
     axes += [np.cross(np.eye(3)[i], edge) for i in range(3) for edge in edges]
@@ -61,7 +59,8 @@ def _touches_box(triangles, low, high):
         projected = np.einsum("mkj,mj->mk", points, axis)
         radius = np.abs(axis) @ half
         inside &= (projected.min(axis=1) <= radius) & (projected.max(axis=1) >= -radius)
-    return bool(inside.any())
+    mask[mask] = inside
+    return mask
 
 
 def coarse_receivers(scene, receivers, depsgraph=None):
@@ -91,11 +90,16 @@ def coarse_receivers(scene, receivers, depsgraph=None):
             near_low, near_high = box_low - reach, box_high + reach
             if (near_low > high).any() or (near_high < low).any():
                 continue  # too far from the receiver to shadow it
-            if not _touches_box(vertices[triangles], near_low, near_high):
+            corners = vertices[triangles]
+            touching = corners[_touching(corners, near_low, near_high)]
+            if len(touching) == 0:
                 continue  # none of the receiver's faces passes where the shadow falls
+            longest = np.linalg.norm(touching - np.roll(touching, 1, axis=1), axis=2).max(axis=1)
+            if np.median(longest) <= COARSE * size:
+                continue  # faces small enough to carry the shadow
             inside = np.all((vertices >= near_low) & (vertices <= near_high), axis=1)
             count = int(np.count_nonzero(inside))
-            if count < MIN_VERTICES and (worst is None or (count, size) < worst[:2]):
+            if worst is None or (count, size) < worst[:2]:
                 worst = (count, size, occluder.name, reach)
         if worst is not None:
             count, size, name, reach = worst
