@@ -1,0 +1,252 @@
+"""A luminaire's intensity I(ω) approximated by a few native lamps (Granier et al. 2003).
+
+Each lamp is Blender's: a point light (the same intensity every way) or a spot light aimed
+along a (light axes) with cone half-angle α and blend β, whose intensity is its on-axis value
+c times Blender's cone mask (Cycles ``spot_light_attenuation``; EEVEE's is the same)
+
+    S(ω) = smoothstep((ω·a − cos α) / ((1 − cos α) β)),   smoothstep(x) = 3x² − 2x³ on [0, 1].
+
+The fit: candidates are spots on a set of axes (a sphere of directions plus the brightest
+samples) × half-angles × blends, and the point light; greedy selection (the candidate that
+alone lowers the residual most), then non-negative least squares (``nnls``) on the selected
+set over the sphere, weighted by solid angle; repeated until the relative RMSE of I over the
+sphere is at most ``error_target`` or ``max_lamps`` are in, then each lamp in turn is swapped
+for the best other candidate while that lowers the error. Directions are the light's local
+axes (nadir −Z), intensities in any unit (candela in, candela out).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .nnls import nnls
+
+HALF_ANGLES_DEG = (4.0, 8.0, 12.0, 16.0, 22.0, 30.0, 40.0, 52.0, 66.0, 80.0, 90.0)
+BLENDS = (0.15, 0.4, 0.7, 1.0)
+
+
+@dataclass(frozen=True)
+class Lamp:
+    """One native lamp: ``kind`` "POINT" or "SPOT"; ``candela`` its on-axis intensity."""
+
+    kind: str
+    axis: tuple
+    half_angle: float  # radians; π for a point light
+    blend: float
+    candela: float
+
+
+@dataclass(frozen=True)
+class LampFit:
+    lamps: tuple
+    intensity_error: float  # relative RMSE of I over the sphere (solid-angle weighted)
+
+
+def smoothstep(x):
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def spot_mask(directions, axis, half_angle, blend):
+    """Blender's spot cone mask toward unit ``directions`` (…, 3)."""
+    cos_half = np.cos(half_angle)
+    width = (1.0 - cos_half) * max(blend, 1e-6)
+    return smoothstep((np.asarray(directions) @ np.asarray(axis) - cos_half) / width)
+
+
+def lamp_intensity(lamps, directions):
+    """Σ lamps' intensity toward ``directions`` (…, 3)."""
+    directions = np.asarray(directions, dtype=np.float64)
+    total = np.zeros(directions.shape[:-1])
+    for lamp in lamps:
+        shape = 1.0 if lamp.kind == "POINT" else spot_mask(directions, lamp.axis,
+                                                           lamp.half_angle, lamp.blend)
+        total = total + lamp.candela * shape
+    return total
+
+
+def sphere_samples(n_theta, n_phi):
+    """Cell-centred directions on the sphere and their exact solid angles (sum 4π)."""
+    edges = np.linspace(0.0, np.pi, n_theta + 1)
+    theta = 0.5 * (edges[:-1] + edges[1:])
+    phi = (np.arange(n_phi) + 0.5) * (2 * np.pi / n_phi)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    dirs = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), -np.cos(t)], axis=-1)
+    weights = np.repeat((np.cos(edges[:-1]) - np.cos(edges[1:])) * (2 * np.pi / n_phi), n_phi)
+    return dirs.reshape(-1, 3), weights
+
+
+def fibonacci_sphere(count):
+    i = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * i / count
+    r = np.sqrt(1.0 - z * z)
+    angle = np.pi * (1.0 + 5 ** 0.5) * i
+    return np.stack([r * np.cos(angle), r * np.sin(angle), z], axis=-1)
+
+
+def relative_rmse(fitted, target, weights):
+    """sqrt(Σ w (f − t)²) / sqrt(Σ w t²)."""
+    norm = np.sqrt(np.sum(weights * target ** 2))
+    return float(np.sqrt(np.sum(weights * (fitted - target) ** 2)) / norm) if norm > 0 else 0.0
+
+
+def fit_lamps(intensity, max_lamps=8, error_target=0.03, n_theta=48, n_phi=96, n_axes=120):
+    """Lamps approximating ``intensity`` (a function of unit directions (…, 3) → values ≥ 0).
+
+    Returns a :class:`LampFit` with the fewest lamps (at most ``max_lamps``) meeting
+    ``error_target`` where the greedy search finds them, and its error on a finer grid.
+    """
+    if max_lamps < 1:
+        raise ValueError("max_lamps must be at least 1")
+    dirs, weights = sphere_samples(n_theta, n_phi)
+    target = np.asarray(intensity(dirs), dtype=np.float64)
+    if not np.isfinite(target).all() or (target < 0).any():
+        raise ValueError("the intensity must be finite and non-negative")
+    if target.max() <= 0:
+        return LampFit((), 0.0)
+    params, columns = _candidates(dirs, target, n_axes)
+    root = np.sqrt(weights)
+    matrix = (columns * root[None, :].astype(np.float32))  # (candidates, samples)
+    norms = np.einsum("ij,ij->i", matrix, matrix, dtype=np.float64)
+    b = target * root
+
+    def solve(chosen):
+        x, _ = nnls(matrix[chosen].T.astype(np.float64), b)
+        keep = [k for k, value in zip(chosen, x) if value > 0]
+        x = x[x > 0]
+        error = float(np.linalg.norm(matrix[keep].T.astype(np.float64) @ x - b) /
+                      np.linalg.norm(b)) if keep else 1.0
+        return keep, x, error
+
+    def best(residual, exclude):
+        score = matrix @ residual.astype(np.float32)
+        gain = np.where(score > 0, score.astype(np.float64) ** 2 / np.maximum(norms, 1e-30), 0)
+        gain[list(exclude)] = -1.0
+        return int(np.argmax(gain))
+
+    chosen, x, error = [], np.zeros(0), 1.0
+    while len(chosen) < max_lamps and error > error_target:
+        residual = b - (matrix[chosen].T.astype(np.float64) @ x if chosen else 0.0)
+        pick = best(residual, chosen)
+        trial, trial_x, trial_error = solve(chosen + [pick])
+        if trial_error >= error - 1e-9:
+            break
+        chosen, x, error = trial, trial_x, trial_error
+    improved = True
+    while improved and len(chosen) > 1:  # swap each lamp for a better one while it helps
+        improved = False
+        for i in range(len(chosen)):
+            others = chosen[:i] + chosen[i + 1:]
+            rest, rest_x, _ = solve(others)
+            residual = b - (matrix[rest].T.astype(np.float64) @ rest_x if rest else 0.0)
+            pick = best(residual, chosen)
+            trial, trial_x, trial_error = solve(rest + [pick])
+            if trial_error < error - 1e-4:
+                chosen, x, error = trial, trial_x, trial_error
+                improved = True
+                break
+    lamps = tuple(_lamp(params[k], value) for k, value in zip(chosen, x))
+    lamps = refine(lamps, dirs, weights, target)
+    fine_dirs, fine_weights = sphere_samples(2 * n_theta, 2 * n_phi)
+    fine_error = relative_rmse(lamp_intensity(lamps, fine_dirs), intensity(fine_dirs),
+                               fine_weights)
+    return LampFit(lamps, fine_error)
+
+
+def refine(lamps, dirs, weights, target, sweeps=12):
+    """Coordinate descent on each spot's axis (two tilts), half-angle and blend, the powers
+    by NNLS at every trial (variable projection), with steps halving when nothing improves."""
+    root = np.sqrt(weights)
+    b = target * root
+    norm = np.linalg.norm(b)
+
+    def columns(spots):
+        return np.stack([root * (1.0 if s is None else spot_mask(dirs, *s)) for s in spots], 1)
+
+    def error(spots):
+        x, residual = nnls(columns(spots), b)
+        return residual / norm, x
+
+    spots = [None if lamp.kind == "POINT" else (np.array(lamp.axis), lamp.half_angle, lamp.blend)
+             for lamp in lamps]
+    best, x = error(spots)
+    step = np.radians(4.0)
+    for _ in range(sweeps):
+        improved = False
+        for i, spot in enumerate(spots):
+            if spot is None:
+                continue
+            for trial in _neighbours(spot, step):
+                candidate = spots[:i] + [trial] + spots[i + 1:]
+                value, trial_x = error(candidate)
+                if value < best - 1e-6:
+                    spots, best, x, spot, improved = candidate, value, trial_x, trial, True
+        if not improved:
+            step *= 0.5
+            if step < np.radians(0.25):
+                break
+    out = []
+    for spot, value in zip(spots, x):
+        if value <= 0:
+            continue
+        out.append(_lamp(None if spot is None else (tuple(spot[0]), spot[1], spot[2]), value))
+    return tuple(out)
+
+
+def _neighbours(spot, step):
+    axis, half, blend = spot
+    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(axis, helper)
+    u /= np.linalg.norm(u)
+    v = np.cross(axis, u)
+    for direction in (u, -u, v, -v):
+        tilted = np.cos(step) * axis + np.sin(step) * direction
+        yield tilted / np.linalg.norm(tilted), half, blend
+    for factor in (1.0 + step, 1.0 / (1.0 + step)):
+        yield axis, float(np.clip(half * factor, np.radians(1.0), np.pi / 2)), blend
+        yield axis, half, float(np.clip(blend * factor, 0.02, 1.0))
+
+
+def _candidates(dirs, target, n_axes):
+    """Candidate parameters (axis, half-angle, blend; None for the point) and their masks."""
+    peak = target.max()
+    brightest = dirs[np.argsort(target)[-24:]]
+    axes = np.concatenate([fibonacci_sphere(n_axes), [[0, 0, -1.0], [0, 0, 1.0]], brightest])
+    nearest = np.argmax(axes @ dirs.T, axis=1)
+    lit = target[nearest] > 0.01 * peak  # a spot aimed into darkness cannot help
+    params = [None]
+    columns = [np.ones(len(dirs), dtype=np.float32)]
+    for axis in axes[lit]:
+        cosines = dirs @ axis
+        for degrees in HALF_ANGLES_DEG:
+            half = np.radians(degrees)
+            for blend in BLENDS:
+                width = (1.0 - np.cos(half)) * blend
+                columns.append(smoothstep((cosines - np.cos(half)) / width).astype(np.float32))
+                params.append((tuple(axis), half, blend))
+    return params, np.stack(columns)
+
+
+def _lamp(param, value):
+    if param is None:
+        return Lamp("POINT", (0.0, 0.0, -1.0), float(np.pi), 0.0, float(value))
+    axis, half, blend = param
+    return Lamp("SPOT", tuple(float(a) for a in axis), float(half), float(blend), float(value))
+
+
+def plane_illuminance_error(intensity, lamps, distance=1.0, half_size=2.0, samples=64):
+    """Relative RMSE of the illuminance E = I cos θ / r² on the plane ``distance`` below.
+
+    The plane is perpendicular to the light's axis (−Z), sampled at cell centres of the
+    square |x|, |y| ≤ ``half_size`` × ``distance``; the lamps against ``intensity``.
+    """
+    step = 2.0 * half_size / samples
+    u = (np.arange(samples) + 0.5) * step - half_size
+    x, y = np.meshgrid(u * distance, u * distance)
+    points = np.stack([x, y, np.full_like(x, -distance)], axis=-1)
+    r = np.linalg.norm(points, axis=-1)
+    dirs = points / r[..., None]
+    factor = (distance / r) / r ** 2
+    exact = np.asarray(intensity(dirs)) * factor
+    fitted = lamp_intensity(lamps, dirs) * factor
+    return relative_rmse(fitted.ravel(), exact.ravel(), np.ones(exact.size))
