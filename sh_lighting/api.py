@@ -28,6 +28,7 @@ from .blender.design.edits import (  # lighting design: exact edits and windows
     saturation,
 )
 from .blender.design import lights as _lights
+from .blender.luminaire import build as _luminaire
 from .blender.presets.preset_io import (
     FORMATS,
     export_preset,
@@ -91,9 +92,33 @@ __all__ = [
     "delete_transfer",
     # lighting from a photo of a grey ball
     "coefficients_from_photo", "photo_exposure", "SecondPhoto", "detect_photo_ball",
+    # measured luminaires (IES, EULUMDAT)
+    "PhotometryError", "LuminaireFit", "add_luminaire", "refit_luminaire", "remove_luminaire",
 ]
 
 TransferError = _transfer.TransferError
+PhotometryError = _luminaire.PhotometryError
+LuminaireFit = _luminaire.FitSettings
+
+
+def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
+                  rotation=(0.0, 0.0, 0.0), fit=LuminaireFit(), power=1.0):
+    """A measured luminaire from an IES or EULUMDAT file (``blender.luminaire.build``): a point
+    light aimed down its local −Z with Blender's IES node (Cycles, exact) and up to
+    ``fit.max_lamps`` fitted spot/point lights as its children (EEVEE). ``power`` 1 W renders
+    the file's candela. A bad file raises ``PhotometryError`` (one line naming the line) and
+    creates nothing. Returns a ``LuminaireInfo`` (``.report()``, ``.root``, ``.lamps``)."""
+    return _luminaire.add_luminaire(scene, path, collection, location, rotation, fit, power)
+
+
+def refit_luminaire(scene, root, fit=LuminaireFit()):
+    """Fit the EEVEE lamps of the luminaire ``root`` again with other ``fit`` settings."""
+    return _luminaire.refit(scene, root, fit)
+
+
+def remove_luminaire(scene, root):
+    """Delete a luminaire the add-on made: its light, lamps and packed IES text."""
+    _luminaire.remove_luminaire(scene, root)
 
 
 def bake_transfer(scene, objects, samples=_transfer.DEFAULT_SAMPLES, report=print,

@@ -7,6 +7,7 @@ and undone in reverse.
 from .data import preferences, settings
 from .ui import design as design_ui
 from .ui import lights as lights_ui
+from .ui import luminaire as luminaire_ui
 from .ui import operators, panels
 from .ui import photo as photo_ui
 from .ui import presets as presets_ui
@@ -14,7 +15,7 @@ from .ui import transfer as transfer_ui
 
 MODULES = (
     preferences, settings, operators, panels, presets_ui, design_ui, lights_ui, transfer_ui,
-    photo_ui,
+    photo_ui, luminaire_ui,
 )
 
 

@@ -1,0 +1,1 @@
+"""Measured luminaires (IES, EULUMDAT): Blender's IES node in Cycles, fitted lamps in EEVEE."""

@@ -1,0 +1,277 @@
+"""A measured luminaire (IES or EULUMDAT file) as Blender lights: exact in Cycles, fitted in EEVEE.
+
+One object, the luminaire, is a point light the user moves and aims like a lamp (it shines
+down its local −Z). Cycles renders it exactly: its node tree is Blender's own IES Texture node
+(the file's text, packed as a Text datablock, converted to IES text for EULUMDAT and type B)
+into the Emission Strength. EEVEE has no light node trees; its children, a few native spot
+and point lights fitted to the candela table (``core.lamp_fit``, Granier et al. 2003), give
+EEVEE the distribution and its shadow maps the shadows.
+
+Which set renders follows the engine with switches each engine honours and the other ignores
+(measured on 5.0, docs/blender.md): the luminaire's Diffuse/Specular/Volume/Transmission
+factors are 0, which EEVEE obeys and Cycles ignores; the fitted lamps' node trees emit with
+Strength 0, which Cycles obeys and EEVEE ignores. The lamps' power and colour are driven by the
+luminaire's (simple-expression drivers, no scripts), so one Power and one Color set both.
+
+Power: Blender's IES node gives v cd as Strength v·4π/177.83 (D65's 177.83 lm/W), so the
+luminaire at 1 W renders the file's absolute candela; a fitted lamp of on-axis intensity c cd
+has power 4π c / 177.83 × the luminaire's power.
+
+Identity: the scene's ``REGISTRY`` property points at what each luminaire made (the light,
+the lamps, the text); a duplicate (Shift+D) is not pointed to and is never changed or deleted.
+"""
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import bpy
+from mathutils import Vector
+
+from ...core.lamp_fit import fit_lamps, plane_illuminance_error, sphere_samples
+from ...core.sh import sh_basis
+from ...formats.ies import parse_ies
+from ...formats.photometric_file import read_with_ies_text
+from ...formats.photometry import PhotometryError
+
+__all__ = (
+    "FitSettings",
+    "LuminaireInfo",
+    "PhotometryError",
+    "add_luminaire",
+    "is_luminaire",
+    "lamps_of",
+    "luminaire_of",
+    "luminaire_sh",
+    "refit",
+    "remove_luminaire",
+)
+
+REGISTRY = "sh_lighting_luminaires"  # scene property: {key: {"root", "lamps", "text"}}
+INFO = "sh_luminaire"  # the luminaire light's read-only summary (a custom property)
+CANDELA_TO_WATT = 4.0 * math.pi / 177.83  # Blender's IES node: Strength per candela
+FACTORS = ("diffuse_factor", "specular_factor", "volume_factor", "transmission_factor")
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """How the EEVEE lamps are fitted and checked."""
+
+    error_target: float = 0.03  # relative RMSE of I over the sphere that ends the search
+    max_lamps: int = 8
+    check_distance: float = 2.0  # metres: the plane whose illuminance error is reported
+
+
+@dataclass(frozen=True)
+class LuminaireInfo:
+    root: object
+    lamps: tuple
+    intensity_error: float
+    plane_error: float
+    flux_lm: float
+
+    def report(self):
+        return (f"Measured luminaire '{self.root.name}': {self.flux_lm:.0f} lm, "
+                f"{len(self.lamps)} EEVEE lamp(s), intensity error {100 * self.intensity_error:.1f} %, "
+                f"illuminance error {100 * self.plane_error:.1f} % on a plane below")
+
+
+def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
+                  rotation=(0.0, 0.0, 0.0), settings=FitSettings(), power=1.0):
+    """Read ``path`` and make the luminaire; nothing is created if the file is bad.
+
+    Raises ``formats.photometry.PhotometryError`` (one line naming the file's line, a
+    ValueError) or ValueError.
+    """
+    path = Path(path)
+    table, text = read_with_ies_text(path)
+    fit, plane = _fit(table, settings)
+    collection = collection or scene.collection
+    name = path.stem
+    ies_text = bpy.data.texts.new(f"{name}.ies")
+    ies_text.from_string(text)
+    data = bpy.data.lights.new(name, type="POINT")
+    data.energy = power
+    data.shadow_soft_size = _radius(table)
+    for factor in FACTORS:
+        if hasattr(data, factor):
+            setattr(data, factor, 0.0)
+    _ies_nodes(data, ies_text)
+    root = bpy.data.objects.new(name, data)
+    root.location = location
+    root.rotation_euler = rotation
+    collection.objects.link(root)
+    lamps = _make_lamps(root, collection, fit.lamps, data.shadow_soft_size)
+    _store_info(root, table, fit, plane, settings, path.name)
+    registry = dict(_registry(scene))
+    key = str(1 + max((int(k) for k in registry), default=0))
+    registry[key] = {"root": root, "lamps": list(lamps), "text": ies_text}
+    scene[REGISTRY] = registry
+    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, plane, table.flux_lm)
+
+
+def refit(scene, root, settings=FitSettings()):
+    """Fit the EEVEE lamps of the luminaire ``root`` again (other target, count or distance)."""
+    entry = _entry(scene, root)
+    if entry is None:
+        raise ValueError(f"'{root.name}' is not a measured luminaire this add-on made")
+    table = parse_ies(entry["text"].as_string(), entry["text"].name)
+    fit, plane = _fit(table, settings)
+    _delete_lamps(entry["lamps"])
+    collection = root.users_collection[0] if root.users_collection else scene.collection
+    lamps = _make_lamps(root, collection, fit.lamps, root.data.shadow_soft_size)
+    _store_info(root, table, fit, plane, settings, root.data[INFO]["source"])
+    entry["lamps"] = list(lamps)
+    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, plane, table.flux_lm)
+
+
+def remove_luminaire(scene, root):
+    """Delete the luminaire ``root`` made by the add-on: its lamps, light data and text."""
+    key = _key(scene, root)
+    if key is None:
+        raise ValueError(f"'{root.name}' is not a measured luminaire this add-on made")
+    entry = scene[REGISTRY][key]
+    _delete_lamps(entry["lamps"])
+    text = entry["text"]
+    data = root.data
+    bpy.data.objects.remove(root)
+    if data is not None and data.users == 0:
+        bpy.data.lights.remove(data)
+    if text is not None and text.users == 0:
+        bpy.data.texts.remove(text)
+    del scene[REGISTRY][key]
+    if not scene[REGISTRY].keys():
+        del scene[REGISTRY]
+
+
+def is_luminaire(scene, obj):
+    """Whether ``obj`` is a luminaire the add-on made in ``scene`` (a duplicate is not)."""
+    return obj is not None and _key(scene, obj) is not None
+
+
+def luminaire_of(scene, obj):
+    """The luminaire ``obj`` is (or is a fitted lamp of), or None."""
+    for entry in _registry(scene).values():
+        if entry.get("root") is not None and (entry["root"] == obj or obj in entry["lamps"]):
+            return entry["root"]
+    return None
+
+
+def lamps_of(scene, root):
+    entry = _entry(scene, root)
+    return [lamp for lamp in entry["lamps"] if lamp is not None] if entry else []
+
+
+def _registry(scene):
+    value = scene.get(REGISTRY)
+    return value if hasattr(value, "to_dict") else {}
+
+
+def _key(scene, obj):
+    for key, entry in _registry(scene).items():
+        if entry.get("root") == obj:
+            return key
+    return None
+
+
+def _entry(scene, obj):
+    key = _key(scene, obj)
+    return None if key is None else scene[REGISTRY][key]
+
+
+def _fit(table, settings):
+    if not 1 <= settings.max_lamps <= 8:
+        raise ValueError(f"lamps: {settings.max_lamps} (from 1 to 8)")
+    fit = fit_lamps(table.intensity, settings.max_lamps, settings.error_target)
+    plane = plane_illuminance_error(table.intensity, fit.lamps, settings.check_distance)
+    return fit, plane
+
+
+def _radius(table):
+    """Half the luminous opening's largest side (a circle's radius), at most 0.25 m."""
+    length, width, _ = table.opening_m
+    return float(min(0.5 * max(abs(length), abs(width)), 0.25))
+
+
+def _ies_nodes(data, text):
+    if data.node_tree is None:
+        data.use_nodes = True
+    tree = data.node_tree
+    emission = next(n for n in tree.nodes if n.type == "EMISSION")
+    ies = tree.nodes.new("ShaderNodeTexIES")
+    ies.mode = "INTERNAL"
+    ies.ies = text
+    ies.location = (emission.location.x - 250, emission.location.y)
+    tree.links.new(ies.outputs["Fac"], emission.inputs["Strength"])
+
+
+def _make_lamps(root, collection, lamps, radius):
+    made = []
+    for index, lamp in enumerate(lamps):
+        name = f"{root.name} EEVEE {index + 1}"
+        data = bpy.data.lights.new(name, type=lamp.kind)
+        data.shadow_soft_size = radius
+        if lamp.kind == "SPOT":
+            data.spot_size = min(2.0 * lamp.half_angle, math.pi)
+            data.spot_blend = lamp.blend
+            data.show_cone = False
+        if data.node_tree is None:
+            data.use_nodes = True
+        emission = next(n for n in data.node_tree.nodes if n.type == "EMISSION")
+        emission.inputs["Strength"].default_value = 0.0  # Cycles: the IES light renders
+        _drive(data, "energy", root, "data.energy", f"var * {lamp.candela * CANDELA_TO_WATT!r}")
+        for channel in range(3):
+            _drive(data, "color", root, f"data.color[{channel}]", "var", channel)
+        obj = bpy.data.objects.new(name, data)
+        obj.parent = root
+        obj.rotation_mode = "QUATERNION"
+        obj.rotation_quaternion = Vector(lamp.axis).to_track_quat("-Z", "Y")
+        obj.hide_select = True
+        collection.objects.link(obj)
+        made.append(obj)
+    return made
+
+
+def _drive(data, prop, root, path, expression, index=-1):
+    curve = data.driver_add(prop, index)
+    driver = curve.driver
+    driver.type = "SCRIPTED"
+    var = driver.variables.new()
+    var.name = "var"
+    var.type = "SINGLE_PROP"
+    var.targets[0].id_type = "OBJECT"
+    var.targets[0].id = root
+    var.targets[0].data_path = path
+    driver.expression = expression
+
+
+def _delete_lamps(lamps):
+    for lamp in list(lamps):
+        if lamp is None:
+            continue
+        data = lamp.data
+        bpy.data.objects.remove(lamp)
+        if data is not None and data.users == 0:
+            bpy.data.lights.remove(data)
+
+
+def luminaire_sh(table, n_theta=90, n_phi=180):
+    """The nine L_lm = ∫ I(ω) Y_lm(ω) dω of the intensity in the light's own axes (cd·sr)."""
+    dirs, weights = sphere_samples(n_theta, n_phi)
+    return (weights * table.intensity(dirs)) @ sh_basis(dirs, 2)
+
+
+def _store_info(root, table, fit, plane, settings, source):
+    root.data[INFO] = {
+        "source": source,
+        "flux_lm": table.flux_lm,
+        "peak_cd": table.peak_cd,
+        "lamps": len(fit.lamps),
+        "intensity_error": fit.intensity_error,
+        "plane_error": plane,
+        "check_distance": settings.check_distance,
+        "error_target": settings.error_target,
+        "max_lamps": settings.max_lamps,
+        "sh": [float(v) for v in luminaire_sh(table)],
+    }
+

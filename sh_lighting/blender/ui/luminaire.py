@@ -1,0 +1,176 @@
+"""Measured luminaires in the UI: Add > Light > Measured Luminaire, refit, remove, the panel."""
+
+import bpy
+from bpy_extras.io_utils import ImportHelper
+
+from ..luminaire import build
+from .polls import scene_poll
+
+NOT_OURS = "Select a measured luminaire made by Add > Light > Measured Luminaire"
+
+
+class _FitSettingsMixin:
+    """The fit's settings, shared by Add and Refit."""
+
+    error_target: bpy.props.FloatProperty(
+        name="Error Target", default=3.0, min=0.1, max=50.0, subtype="PERCENTAGE",
+        description="Relative RMS error of the intensity over the sphere at which the EEVEE "
+        "fit stops adding lamps")
+    max_lamps: bpy.props.IntProperty(
+        name="Lamps", default=8, min=1, max=8,
+        description="Most EEVEE lamps (spot and point lights) the fit may use")
+    check_distance: bpy.props.FloatProperty(
+        name="Check Distance", default=2.0, min=0.01, soft_max=20.0, unit="LENGTH",
+        description="Distance of the plane below the luminaire whose illuminance error "
+        "(EEVEE lamps against the file) the panel shows")
+
+    def fit_settings(self):
+        return build.FitSettings(self.error_target / 100.0, self.max_lamps, self.check_distance)
+
+
+class SHLIGHT_OT_add_luminaire(bpy.types.Operator, ImportHelper, _FitSettingsMixin):
+    """Add a measured luminaire from an IES or EULUMDAT file: exact in Cycles (Blender's IES
+    node), a few fitted spot and point lights in EEVEE, with shadows in both"""
+
+    bl_idname = "shlight.add_luminaire"
+    bl_label = "Measured Luminaire"
+    bl_options = {"REGISTER", "UNDO"}
+
+    filter_glob: bpy.props.StringProperty(default="*.ies;*.IES;*.ldt;*.LDT", options={"HIDDEN"})
+
+    @classmethod
+    def poll(cls, context):
+        return scene_poll(cls, context)
+
+    def execute(self, context):
+        try:
+            info = build.add_luminaire(
+                context.scene, self.filepath, collection=context.collection,
+                location=tuple(context.scene.cursor.location), settings=self.fit_settings())
+        except ValueError as error:  # PhotometryError too: one line, nothing created
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        for obj in context.selected_objects:
+            obj.select_set(False)
+        info.root.select_set(True)
+        context.view_layer.objects.active = info.root
+        self.report({"INFO"}, info.report())
+        return {"FINISHED"}
+
+
+def _luminaire_poll(cls, context):
+    if not scene_poll(cls, context):
+        return False
+    if not build.is_luminaire(context.scene, context.object):
+        cls.poll_message_set(NOT_OURS)
+        return False
+    return True
+
+
+class SHLIGHT_OT_refit_luminaire(bpy.types.Operator, _FitSettingsMixin):
+    """Fit the luminaire's EEVEE lamps again with another error target, lamp count or check
+    distance (the Cycles light does not change)"""
+
+    bl_idname = "shlight.refit_luminaire"
+    bl_label = "Refit EEVEE Lamps"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return _luminaire_poll(cls, context)
+
+    def invoke(self, context, event):
+        info = context.object.data.get(build.INFO, {})
+        self.error_target = 100.0 * info.get("error_target", 0.03)
+        self.max_lamps = info.get("max_lamps", 8)
+        self.check_distance = info.get("check_distance", 2.0)
+        return context.window_manager.invoke_props_dialog(self)
+
+    def execute(self, context):
+        try:
+            info = build.refit(context.scene, context.object, self.fit_settings())
+        except ValueError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"INFO"}, info.report())
+        return {"FINISHED"}
+
+
+class SHLIGHT_OT_remove_luminaire(bpy.types.Operator):
+    """Delete this measured luminaire: its light, EEVEE lamps and packed IES text (copies
+    you made are kept)"""
+
+    bl_idname = "shlight.remove_luminaire"
+    bl_label = "Remove Luminaire"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return _luminaire_poll(cls, context)
+
+    def execute(self, context):
+        name = context.object.name
+        build.remove_luminaire(context.scene, context.object)
+        self.report({"INFO"}, f"Removed measured luminaire '{name}'")
+        return {"FINISHED"}
+
+
+class SHLIGHT_PT_luminaire(bpy.types.Panel):
+    """The luminaire's file, flux, fit errors and SH coefficients (Light properties)."""
+
+    bl_label = "Measured Luminaire"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "data"
+
+    @classmethod
+    def poll(cls, context):
+        return (context.scene is not None and context.object is not None
+                and context.object.type == "LIGHT"
+                and build.is_luminaire(context.scene, context.object))
+
+    def draw(self, context):
+        layout = self.layout
+        light = context.object.data
+        info = light.get(build.INFO, {})
+        col = layout.column(align=True)
+        col.label(text=f"File: {info.get('source', '?')}", icon="FILE")
+        col.label(text=f"Flux {info.get('flux_lm', 0):.0f} lm, peak {info.get('peak_cd', 0):.0f} cd")
+        layout.prop(light, "energy", text="Intensity (1 W = the file's candela)")
+        layout.prop(light, "color")
+        box = layout.box()
+        box.label(text=f"EEVEE: {info.get('lamps', 0)} lamp(s), Cycles: the IES node (exact)")
+        box.label(text=f"Intensity error {100 * info.get('intensity_error', 0):.1f} % "
+                       "(relative RMS over the sphere)")
+        box.label(text=f"Illuminance error {100 * info.get('plane_error', 0):.1f} % on a plane "
+                       f"{info.get('check_distance', 0):.2f} m below")
+        row = layout.row(align=True)
+        row.operator(SHLIGHT_OT_refit_luminaire.bl_idname, icon="FILE_REFRESH")
+        row.operator(SHLIGHT_OT_remove_luminaire.bl_idname, icon="TRASH")
+        sh = list(info.get("sh", []))
+        if len(sh) == 9:
+            col = layout.column(align=True)
+            col.label(text="SH coefficients of I(ω), light axes (cd·sr):")
+            names = ("L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22")
+            for start in (0, 3, 6):
+                col.label(text="   ".join(f"{n} {v:.4g}" for n, v in
+                                          zip(names[start:start + 3], sh[start:start + 3])))
+
+
+def draw_add_menu(self, context):
+    self.layout.operator(SHLIGHT_OT_add_luminaire.bl_idname, icon="LIGHT_SPOT")
+
+
+classes = (SHLIGHT_OT_add_luminaire, SHLIGHT_OT_refit_luminaire, SHLIGHT_OT_remove_luminaire,
+           SHLIGHT_PT_luminaire)
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    _register_classes()
+    bpy.types.VIEW3D_MT_light_add.append(draw_add_menu)  # Add > Light
+
+
+def unregister():
+    bpy.types.VIEW3D_MT_light_add.remove(draw_add_menu)
+    _unregister_classes()
