@@ -4,14 +4,19 @@ Each lamp is Blender's: a point light (the same intensity every way) or a spot l
 along a (light axes) with cone half-angle α and blend β, whose intensity is its on-axis value
 c times Blender's cone mask (Cycles ``spot_light_attenuation``; EEVEE's is the same)
 
-    S(ω) = smoothstep((ω·a − cos α) / ((1 − cos α) β)),   smoothstep(x) = 3x² − 2x³ on [0, 1].
+    S(ω) = smoothstep((ẑ − cos α) / ((1 − cos α) β)),   smoothstep(x) = 3x² − 2x³ on [0, 1],
+    ẑ = z / |(x / s_x, y / s_y, z)|
+
+with (x, y, z) = (ω·e_x, ω·e_y, ω·a) in the spot's frame and (s_x, s_y) the spot object's
+scale (1, 1: a round cone, ẑ = ω·a; otherwise an elliptical one, as Blender scales spots).
 
 The fit: candidates are spots on a set of axes (a sphere of directions plus the brightest
 samples) × half-angles × blends, and the point light; greedy selection (the candidate that
 alone lowers the residual most), then non-negative least squares (``nnls``) on the selected
 set over the sphere, weighted by solid angle; repeated until the relative RMSE of I over the
 sphere is at most ``error_target`` or ``max_lamps`` are in, then each lamp in turn is swapped
-for the best other candidate while that lowers the error. Directions are the light's local
+for the best other candidate while that lowers the error, and coordinate descent refines each
+spot's axis, roll, scale, angle and blend. Directions are the light's local
 axes (nadir −Z), intensities in any unit (candela in, candela out).
 """
 
@@ -34,6 +39,8 @@ class Lamp:
     half_angle: float  # radians; π for a point light
     blend: float
     candela: float
+    x_axis: tuple = None  # the spot's local +X (⊥ axis); None: any (a round cone)
+    scale: tuple = (1.0, 1.0)  # the spot object's X and Y scale (an elliptical cone)
 
 
 @dataclass(frozen=True)
@@ -47,11 +54,17 @@ def smoothstep(x):
     return x * x * (3.0 - 2.0 * x)
 
 
-def spot_mask(directions, axis, half_angle, blend):
+def spot_mask(directions, axis, half_angle, blend, x_axis=None, scale=(1.0, 1.0)):
     """Blender's spot cone mask toward unit ``directions`` (…, 3)."""
     cos_half = np.cos(half_angle)
     width = (1.0 - cos_half) * max(blend, 1e-6)
-    return smoothstep((np.asarray(directions) @ np.asarray(axis) - cos_half) / width)
+    d = np.asarray(directions)
+    z = d @ np.asarray(axis)
+    if x_axis is not None and (scale[0] != 1.0 or scale[1] != 1.0):
+        x = d @ np.asarray(x_axis)
+        y = d @ np.cross(np.asarray(axis), np.asarray(x_axis))
+        z = z / np.sqrt((x / scale[0]) ** 2 + (y / scale[1]) ** 2 + z * z)
+    return smoothstep((z - cos_half) / width)
 
 
 def lamp_intensity(lamps, directions):
@@ -59,8 +72,8 @@ def lamp_intensity(lamps, directions):
     directions = np.asarray(directions, dtype=np.float64)
     total = np.zeros(directions.shape[:-1])
     for lamp in lamps:
-        shape = 1.0 if lamp.kind == "POINT" else spot_mask(directions, lamp.axis,
-                                                           lamp.half_angle, lamp.blend)
+        shape = 1.0 if lamp.kind == "POINT" else spot_mask(
+            directions, lamp.axis, lamp.half_angle, lamp.blend, lamp.x_axis, lamp.scale)
         total = total + lamp.candela * shape
     return total
 
@@ -90,11 +103,17 @@ def relative_rmse(fitted, target, weights):
     return float(np.sqrt(np.sum(weights * (fitted - target) ** 2)) / norm) if norm > 0 else 0.0
 
 
-def fit_lamps(intensity, max_lamps=8, error_target=0.03, n_theta=48, n_phi=96, n_axes=120):
+def fit_lamps(intensity, max_lamps=8, error_target=0.03, room=None, n_theta=48, n_phi=96,
+              n_axes=120):
     """Lamps approximating ``intensity`` (a function of unit directions (…, 3) → values ≥ 0).
 
-    Returns a :class:`LampFit` with the fewest lamps (at most ``max_lamps``) meeting
-    ``error_target`` where the greedy search finds them, and its error on a finer grid.
+    The objective is the relative squared error of I over the sphere (solid-angle weighted)
+    and, with ``room`` = d metres, that of the illuminance E = I cos/r² on each lit surface
+    of a room around the luminaire (floor and ceiling d below and above, |x|, |y| ≤ 2d; walls
+    d away, −d ≤ z ≤ 3d), each surface normalised by its own RMS: a dim wall counts as much
+    as the bright floor. ``error_target`` applies to the RMS of these relative errors.
+    Returns a :class:`LampFit` with the fewest lamps (at most ``max_lamps``) meeting it where
+    the greedy search finds them, and the intensity error over the sphere on a finer grid.
     """
     if max_lamps < 1:
         raise ValueError("max_lamps must be at least 1")
@@ -104,11 +123,10 @@ def fit_lamps(intensity, max_lamps=8, error_target=0.03, n_theta=48, n_phi=96, n
         raise ValueError("the intensity must be finite and non-negative")
     if target.max() <= 0:
         return LampFit((), 0.0)
-    params, columns = _candidates(dirs, target, n_axes)
-    root = np.sqrt(weights)
-    matrix = (columns * root[None, :].astype(np.float32))  # (candidates, samples)
+    rows, row_weight, b = _objective(intensity, dirs, weights, room, 16)
+    params, columns = _candidates(rows, np.asarray(intensity(rows)), n_axes)
+    matrix = columns * row_weight[None, :].astype(np.float32)  # (candidates, rows)
     norms = np.einsum("ij,ij->i", matrix, matrix, dtype=np.float64)
-    b = target * root
 
     def solve(chosen):
         x, _ = nnls(matrix[chosen].T.astype(np.float64), b)
@@ -146,30 +164,74 @@ def fit_lamps(intensity, max_lamps=8, error_target=0.03, n_theta=48, n_phi=96, n
                 improved = True
                 break
     lamps = tuple(_lamp(params[k], value) for k, value in zip(chosen, x))
-    lamps = refine(lamps, dirs, weights, target)
+    # refined on twice as fine a sampling: a narrow spot cannot hide between samples
+    fine_dirs, fine_weights = sphere_samples(2 * n_theta, 2 * n_phi)
+    lamps = refine(lamps, *_objective(intensity, fine_dirs, fine_weights, room, 40))
     fine_dirs, fine_weights = sphere_samples(2 * n_theta, 2 * n_phi)
     fine_error = relative_rmse(lamp_intensity(lamps, fine_dirs), intensity(fine_dirs),
                                fine_weights)
     return LampFit(lamps, fine_error)
 
 
-def refine(lamps, dirs, weights, target, sweeps=12):
+def _objective(intensity, dirs, weights, room, room_samples):
+    """Sample directions, row weights and weighted targets of the fit's blocks (see fit)."""
+    blocks = [(dirs, np.sqrt(weights))]
+    if room is not None:
+        blocks += _room_blocks(room, room_samples)
+    rows, row_weight, b = [], [], []
+    for block_dirs, factor in blocks:
+        t = np.asarray(intensity(block_dirs), dtype=np.float64) * factor
+        norm = np.linalg.norm(t)
+        if norm <= 0:
+            continue
+        rows.append(block_dirs)
+        row_weight.append(factor / norm)
+        b.append(t / norm)
+    scale = 1.0 / np.sqrt(len(rows))  # the RMS over blocks of each block's relative error
+    return (np.concatenate(rows), np.concatenate(row_weight) * scale,
+            np.concatenate(b) * scale)
+
+
+def _room_blocks(d, samples):
+    """(directions, cos/r²) on the floor, ceiling and four walls of the room of ``fit``."""
+    u = (np.arange(samples) + 0.5) / samples * 4 * d - 2 * d
+    a, c = np.meshgrid(u, u + d)  # c: −d..3d on the walls
+    e, f = np.meshgrid(u, u)
+    faces = [
+        (np.stack([e, f, np.full_like(e, -d)], -1), np.array([0.0, 0.0, 1.0])),
+        (np.stack([e, f, np.full_like(e, d)], -1), np.array([0.0, 0.0, -1.0])),
+        (np.stack([np.full_like(a, d), a, c], -1), np.array([-1.0, 0.0, 0.0])),
+        (np.stack([np.full_like(a, -d), a, c], -1), np.array([1.0, 0.0, 0.0])),
+        (np.stack([a, np.full_like(a, d), c], -1), np.array([0.0, -1.0, 0.0])),
+        (np.stack([a, np.full_like(a, -d), c], -1), np.array([0.0, 1.0, 0.0])),
+    ]
+    out = []
+    for points, normal in faces:
+        points = points.reshape(-1, 3)
+        r = np.linalg.norm(points, axis=-1)
+        dirs = points / r[:, None]
+        out.append((dirs, np.clip(-(dirs @ normal), 0.0, None) / r ** 2))
+    return out
+
+
+def refine(lamps, dirs, row_weight, b, sweeps=12):
     """Coordinate descent on each spot's axis (two tilts), half-angle and blend, the powers
     by NNLS at every trial (variable projection), with steps halving when nothing improves."""
-    root = np.sqrt(weights)
-    b = target * root
     norm = np.linalg.norm(b)
 
-    def columns(spots):
-        return np.stack([root * (1.0 if s is None else spot_mask(dirs, *s)) for s in spots], 1)
+    def column(s):
+        return row_weight * (1.0 if s is None else spot_mask(dirs, s[0], s[1], s[2], s[3], s[4]))
 
-    def error(spots):
-        x, residual = nnls(columns(spots), b)
+    def error(matrix):
+        x, residual = nnls(matrix, b)
         return residual / norm, x
 
-    spots = [None if lamp.kind == "POINT" else (np.array(lamp.axis), lamp.half_angle, lamp.blend)
-             for lamp in lamps]
-    best, x = error(spots)
+    spots = [None if lamp.kind == "POINT" else
+             (np.array(lamp.axis), lamp.half_angle, lamp.blend,
+              np.array(lamp.x_axis) if lamp.x_axis is not None else perpendicular(lamp.axis),
+              tuple(lamp.scale)) for lamp in lamps]
+    matrix = np.stack([column(s) for s in spots], 1)
+    best, x = error(matrix)
     step = np.radians(4.0)
     for _ in range(sweeps):
         improved = False
@@ -177,10 +239,12 @@ def refine(lamps, dirs, weights, target, sweeps=12):
             if spot is None:
                 continue
             for trial in _neighbours(spot, step):
-                candidate = spots[:i] + [trial] + spots[i + 1:]
-                value, trial_x = error(candidate)
+                trial_matrix = matrix.copy()
+                trial_matrix[:, i] = column(trial)  # only the moved lamp's column changes
+                value, trial_x = error(trial_matrix)
                 if value < best - 1e-6:
-                    spots, best, x, spot, improved = candidate, value, trial_x, trial, True
+                    spots[i], matrix, best, x, spot, improved = (trial, trial_matrix, value,
+                                                                 trial_x, trial, True)
         if not improved:
             step *= 0.5
             if step < np.radians(0.25):
@@ -189,22 +253,41 @@ def refine(lamps, dirs, weights, target, sweeps=12):
     for spot, value in zip(spots, x):
         if value <= 0:
             continue
-        out.append(_lamp(None if spot is None else (tuple(spot[0]), spot[1], spot[2]), value))
+        if spot is None:
+            out.append(_lamp(None, value))
+        else:
+            axis, half, blend, x_axis, scale = spot
+            out.append(Lamp("SPOT", tuple(float(a) for a in axis), float(half), float(blend),
+                            float(value), tuple(float(a) for a in x_axis),
+                            (float(scale[0]), float(scale[1]))))
     return tuple(out)
 
 
-def _neighbours(spot, step):
-    axis, half, blend = spot
+def perpendicular(axis):
+    """A unit vector ⊥ ``axis`` (Blender's to_track_quat('-Z', 'Y') X axis up to sign)."""
+    axis = np.asarray(axis, dtype=np.float64)
     helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     u = np.cross(axis, helper)
-    u /= np.linalg.norm(u)
+    return u / np.linalg.norm(u)
+
+
+def _neighbours(spot, step):
+    axis, half, blend, u, scale = spot
     v = np.cross(axis, u)
-    for direction in (u, -u, v, -v):
+    for direction in (u, -u, v, -v):  # tilt the axis, carrying the frame along
         tilted = np.cos(step) * axis + np.sin(step) * direction
-        yield tilted / np.linalg.norm(tilted), half, blend
-    for factor in (1.0 + step, 1.0 / (1.0 + step)):
-        yield axis, float(np.clip(half * factor, np.radians(1.0), np.pi / 2)), blend
-        yield axis, half, float(np.clip(blend * factor, 0.02, 1.0))
+        tilted /= np.linalg.norm(tilted)
+        x_axis = u - tilted * (u @ tilted)
+        yield tilted, half, blend, x_axis / np.linalg.norm(x_axis), scale
+    for turn in (step, -step):  # roll about the axis
+        yield axis, half, blend, np.cos(turn) * u + np.sin(turn) * v, scale
+    for factor in (1.0 + 2 * step, 1.0 / (1.0 + 2 * step)):
+        yield axis, float(np.clip(half * factor, np.radians(1.0), np.pi / 2)), blend, u, scale
+        yield axis, half, float(np.clip(blend * factor, 0.02, 1.0)), u, scale
+        for k in (0, 1):
+            stretched = list(scale)
+            stretched[k] = float(np.clip(stretched[k] * factor, 0.2, 5.0))
+            yield axis, half, blend, u, tuple(stretched)
 
 
 def _candidates(dirs, target, n_axes):

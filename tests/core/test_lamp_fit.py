@@ -65,3 +65,16 @@ def test_plane_error_zero_for_itself_and_positive_otherwise():
     assert plane_illuminance_error(lambda d: lamp_intensity(lamps, d), lamps) == 0.0
     assert plane_illuminance_error(lambda d: 1.1 * lamp_intensity(lamps, d), lamps) == \
         pytest.approx(0.1 / 1.1)
+
+
+def test_elliptical_spot_mask_stretches_the_cone():
+    """Scale (2, 1) widens the cone along the spot's X only: tan of the edge doubles."""
+    half = np.radians(20.0)
+    axis, x_axis = (0.0, 0.0, -1.0), (1.0, 0.0, 0.0)
+    edge_x = np.arctan(2 * np.tan(half))
+    along_x = np.array([[np.sin(a), 0.0, -np.cos(a)] for a in (edge_x - 0.01, edge_x + 0.01)])
+    along_y = np.array([[0.0, np.sin(a), -np.cos(a)] for a in (half - 0.01, half + 0.01)])
+    mask_x = spot_mask(along_x, axis, half, 0.01, x_axis, (2.0, 1.0))
+    mask_y = spot_mask(along_y, axis, half, 0.01, x_axis, (2.0, 1.0))
+    assert mask_x[0] == 1.0 and mask_x[1] == 0.0 and mask_y[0] == 1.0 and mask_y[1] == 0.0
+

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import bpy
-from mathutils import Vector
+from mathutils import Matrix, Vector
 
 from ...core.lamp_fit import fit_lamps, plane_illuminance_error, sphere_samples
 from ...core.sh import sh_basis
@@ -182,7 +182,8 @@ def _entry(scene, obj):
 def _fit(table, settings):
     if not 1 <= settings.max_lamps <= 8:
         raise ValueError(f"lamps: {settings.max_lamps} (from 1 to 8)")
-    fit = fit_lamps(table.intensity, settings.max_lamps, settings.error_target)
+    fit = fit_lamps(table.intensity, settings.max_lamps, settings.error_target,
+                    room=settings.check_distance)
     plane = plane_illuminance_error(table.intensity, fit.lamps, settings.check_distance)
     return fit, plane
 
@@ -225,7 +226,10 @@ def _make_lamps(root, collection, lamps, radius):
         obj = bpy.data.objects.new(name, data)
         obj.parent = root
         obj.rotation_mode = "QUATERNION"
-        obj.rotation_quaternion = Vector(lamp.axis).to_track_quat("-Z", "Y")
+        z = -Vector(lamp.axis)
+        x = Vector(lamp.x_axis) if lamp.x_axis is not None else z.orthogonal().normalized()
+        obj.rotation_quaternion = Matrix((x, z.cross(x), z)).transposed().to_quaternion()
+        obj.scale = (lamp.scale[0], lamp.scale[1], 1.0)
         obj.hide_select = True
         collection.objects.link(obj)
         made.append(obj)
