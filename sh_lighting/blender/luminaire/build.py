@@ -137,11 +137,18 @@ def remove_luminaire(scene, root):
     bpy.data.objects.remove(root)
     if data is not None and data.users == 0:
         bpy.data.lights.remove(data)
-    if text is not None and text.users == 0:
+    if text is not None and not _text_in_use(text):
         bpy.data.texts.remove(text)
     del scene[REGISTRY][key]
     if not scene[REGISTRY].keys():
         del scene[REGISTRY]
+
+
+def _text_in_use(text):
+    """Whether any light's IES node (a copy the user made, say) still reads ``text``."""
+    return any(node.type == "TEX_IES" and node.ies == text
+               for light in bpy.data.lights if light.node_tree is not None
+               for node in light.node_tree.nodes)
 
 
 def is_luminaire(scene, obj):

@@ -1,0 +1,193 @@
+"""Measured luminaires in Blender: Cycles against Blender's own IES node, the EEVEE lamps
+rendered in Cycles against the exact light, identity, removal and bad files."""
+
+from pathlib import Path
+
+import bpy
+import numpy as np
+import pytest
+from luminaire_scenes import (
+    HEIGHT,
+    illuminance_maps,
+    predicted_maps,
+    relative_rmse,
+    scene_with_floor_and_wall,
+)
+
+from sh_lighting.blender.luminaire import build
+from sh_lighting.formats.photometric_file import read_photometry
+
+pytestmark = pytest.mark.blender
+DATA = Path(__file__).resolve().parents[2] / "data" / "photometry"
+REAL_IES = ("bega_50988_lm63_1995.ies", "floodlight_12w_54deg.ies", "indoor_60w_ovni.ies",
+            "italo_1_5p5.ies", "maxwell_8_t4.ies")
+LDT = ("ledvance_fl_max_lum_600w_sym30.ldt", "road_luminaire.ldt", "projector.ldt",
+       "fluorescent_luminaire.ldt", "wiki_batwing.ldt")
+
+
+def _add(scene, name, lamps=1):
+    """The luminaire 2 m up; one EEVEE lamp unless the test is about the fit (it is slow)."""
+    settings = build.FitSettings(max_lamps=lamps)
+    info = build.add_luminaire(scene, DATA / name, location=(0.0, 0.0, HEIGHT), settings=settings)
+    info.root.data.shadow_soft_size = 0.0  # a point: one sample is the exact direct light
+    for lamp in info.lamps:
+        lamp.data.shadow_soft_size = 0.0
+    return info
+
+
+@pytest.mark.parametrize("name", REAL_IES)
+def test_cycles_equals_hand_built_ies_node(name, tmp_path):
+    """The add-on's light renders exactly what a point light with Blender's IES Texture node
+    (the file loaded from disk, Strength into Emission, 1 W) renders."""
+    scene = scene_with_floor_and_wall()
+    _add(scene, name)
+    ours = illuminance_maps(scene, tmp_path, "ours")
+    bpy.data.objects.remove(scene.objects[DATA.joinpath(name).stem])
+    for obj in [o for o in scene.objects if " EEVEE " in o.name]:
+        bpy.data.objects.remove(obj)
+    light = bpy.data.lights.new("hand", "POINT")
+    light.energy, light.shadow_soft_size = 1.0, 0.0
+    light.use_nodes = True
+    ies = light.node_tree.nodes.new("ShaderNodeTexIES")
+    ies.mode, ies.filepath = "EXTERNAL", str(DATA / name)
+    light.node_tree.links.new(ies.outputs["Fac"],
+                              light.node_tree.nodes["Emission"].inputs["Strength"])
+    obj = bpy.data.objects.new("hand", light)
+    obj.location = (0.0, 0.0, HEIGHT)
+    scene.collection.objects.link(obj)
+    hand = illuminance_maps(scene, tmp_path, "hand")
+    for which in ("floor", "wall"):
+        assert ours[which].max() > 0
+        assert np.abs(ours[which] - hand[which]).max() <= 1e-5 * hand[which].max()
+
+
+# Cycles interpolates the table cubically, the reader bilinearly: they agree at the samples
+# and differ between them (most on coarse files and near the 90° cut-off the wall sees).
+TABLE_TOLERANCE = {"floor": 0.04, "wall": 0.07}
+
+
+@pytest.mark.parametrize("name", REAL_IES + LDT)
+def test_blender_reads_the_same_table(name, tmp_path):
+    """Blender's IES node (the file, or the IES text an LDT becomes) rendered on a floor and
+    a wall gives the illuminance our candela table predicts: axes, scale, symmetry."""
+    scene = scene_with_floor_and_wall()
+    _add(scene, name)
+    rendered = illuminance_maps(scene, tmp_path, "exact")
+    predicted = predicted_maps(read_photometry(DATA / name).intensity)
+    for which, tolerance in TABLE_TOLERANCE.items():
+        if predicted[which].max() > 0:
+            assert relative_rmse(rendered[which], predicted[which]) < tolerance, which
+
+
+def _fitted_in_cycles(scene, info, tmp_path):
+    """The EEVEE lamps rendered in Cycles, one at a time and summed (Cycles picks one light
+    per sample, so one sample of all of them would be noisy; each alone is exact)."""
+    info.root.hide_render = True
+    total = None
+    for lamp in info.lamps:
+        lamp.data.node_tree.nodes["Emission"].inputs["Strength"].default_value = 1.0
+        for other in info.lamps:
+            other.hide_render = other is not lamp
+        maps = illuminance_maps(scene, tmp_path, "fit")
+        total = maps if total is None else {k: total[k] + maps[k] for k in maps}
+    return total
+
+
+# Measured (docs/blender.md): round distributions meet 5 %; asymmetric ones (road, flood,
+# projector) do not with 8 lamps.
+MEETS_FIVE_PERCENT = ("bega_50988_lm63_1995.ies", "indoor_60w_ovni.ies",
+                      "fluorescent_luminaire.ldt", "wiki_batwing.ldt")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", REAL_IES + LDT)
+def test_fitted_lamps_against_the_exact_render(name, tmp_path):
+    scene = scene_with_floor_and_wall()
+    info = _add(scene, name, lamps=8)
+    assert 1 <= len(info.lamps) <= 8
+    exact = illuminance_maps(scene, tmp_path, "exact")
+    fitted = _fitted_in_cycles(scene, info, tmp_path)
+    errors = {k: relative_rmse(fitted[k], exact[k]) for k in exact if exact[k].max() > 0}
+    shown = info.root.data[build.INFO]["plane_error"]
+    print(name, len(info.lamps), {k: round(100 * v, 1) for k, v in errors.items()},
+          "shown", round(100 * shown, 1))
+    assert shown / 1.5 <= errors["floor"] <= 1.5 * shown  # the panel tells the truth
+    if name in MEETS_FIVE_PERCENT:
+        assert max(errors.values()) <= 0.05
+
+
+def test_engine_switches(tmp_path):
+    """Cycles ignores the luminaire's zero factors and obeys the lamps' zero Strength."""
+    scene = scene_with_floor_and_wall()
+    info = _add(scene, "bega_50988_lm63_1995.ies")
+    assert all(getattr(info.root.data, f, 0.0) == 0.0 for f in build.FACTORS)
+    info.root.hide_render = True
+    dark = illuminance_maps(scene, tmp_path, "lamps")  # lamps alone, Strength 0
+    assert dark["floor"].max() == 0.0
+
+
+def test_power_and_colour_drive_the_lamps():
+    scene = bpy.context.scene
+    info = build.add_luminaire(scene, DATA / "wiki_spotlight.ldt",
+                               settings=build.FitSettings(max_lamps=2))
+    info.root.data.energy = 3.0
+    info.root.data.color = (1.0, 0.5, 0.25)
+    bpy.context.view_layer.update()
+    lamp = info.lamps[0]
+    ratio = lamp.data.energy / 3.0
+    info.root.data.energy = 6.0
+    bpy.context.view_layer.update()
+    assert lamp.data.energy == pytest.approx(6.0 * ratio, rel=1e-6)
+    assert tuple(lamp.data.color) == pytest.approx((1.0, 0.5, 0.25))
+
+
+def test_identity_refit_and_remove_leave_nothing():
+    scene = bpy.context.scene
+    before = (set(bpy.data.objects), set(bpy.data.lights), set(bpy.data.texts))
+    info = build.add_luminaire(scene, DATA / "projector.ldt", settings=build.FitSettings(
+        max_lamps=1))
+    copy = info.root.copy()
+    copy.data = info.root.data.copy()
+    scene.collection.objects.link(copy)
+    assert build.is_luminaire(scene, info.root) and not build.is_luminaire(scene, copy)
+    with pytest.raises(ValueError, match="not a measured luminaire"):
+        build.remove_luminaire(scene, copy)
+    refit = build.refit(scene, info.root, build.FitSettings(max_lamps=2))
+    assert len(refit.lamps) <= 2 and len(build.lamps_of(scene, info.root)) == len(refit.lamps)
+    lights_after_refit = {o for o in bpy.data.objects if o.type == "LIGHT"}
+    assert len(lights_after_refit) == 2 + len(refit.lamps)  # root, copy, new lamps
+    copied_data = copy.data
+    bpy.data.objects.remove(copy)
+    bpy.data.lights.remove(copied_data)  # it used the packed text too
+    build.remove_luminaire(scene, info.root)
+    assert (set(bpy.data.objects), set(bpy.data.texts)) == (before[0], before[2])
+    assert build.REGISTRY not in scene
+
+
+NAN_FILE = "IESNA:LM-63-2002\nTILT=NONE\n1 1 1 2 1 1 2 0 0 0\n1 1 1\n0 90\n0\n5 nan\n"
+
+
+@pytest.mark.parametrize("text", ["", NAN_FILE])
+def test_bad_file_creates_nothing(text, tmp_path):
+    path = tmp_path / "bad.ies"
+    path.write_text(text)
+    before = (len(bpy.data.objects), len(bpy.data.lights), len(bpy.data.texts))
+    with pytest.raises(ValueError, match=r"^bad\.ies line \d+: "):
+        build.add_luminaire(bpy.context.scene, path)
+    assert (len(bpy.data.objects), len(bpy.data.lights), len(bpy.data.texts)) == before
+
+
+def test_operator_menu_and_unregister(addon):
+    from sh_lighting.blender.ui import luminaire as ui
+
+    assert ui.draw_add_menu in bpy.types.VIEW3D_MT_light_add.draw._draw_funcs
+    result = bpy.ops.shlight.add_luminaire(filepath=str(DATA / "bega_50988_lm63_1995.ies"),
+                                           max_lamps=1)
+    assert result == {"FINISHED"}
+    assert build.is_luminaire(bpy.context.scene, bpy.context.object)
+    assert bpy.ops.shlight.remove_luminaire() == {"FINISHED"}
+    assert build.REGISTRY not in bpy.context.scene
+    addon.unregister()
+    assert ui.draw_add_menu not in bpy.types.VIEW3D_MT_light_add.draw._draw_funcs
+    assert not hasattr(bpy.types, "SHLIGHT_PT_luminaire")
+    addon.register()  # the fixture unregisters again
