@@ -191,3 +191,34 @@ def test_operator_menu_and_unregister(addon):
     assert ui.draw_add_menu not in bpy.types.VIEW3D_MT_light_add.draw._draw_funcs
     assert not hasattr(bpy.types, "SHLIGHT_PT_luminaire")
     addon.register()  # the fixture unregisters again
+
+
+@pytest.mark.slow
+def test_eevee_shadow_matches_cycles(tmp_path):
+    """One tiny EEVEE render: a cube on the floor under the luminaire casts a shadow whose
+    area is within 10 % of the one in Cycles' exact render."""
+    from sh_lighting.blender.data import compat
+
+    size = 96
+    scene = scene_with_floor_and_wall(size=size)
+    info = _add(scene, "bega_50988_lm63_1995.ies", lamps=4)
+    bpy.ops.mesh.primitive_cube_add(size=0.8, location=(0.4, 0.0, 0.4))
+    predicted = predicted_maps(read_photometry(DATA / "bega_50988_lm63_1995.ies").intensity,
+                               size=size)["floor"]
+    u = (np.arange(size) + 0.5) / size * 4 * HEIGHT - 2 * HEIGHT
+    x, y = np.meshgrid(u, -u)
+    floor = (np.abs(x - 0.4) > 0.45) | (np.abs(y) > 0.45)  # not the cube's top
+    floor &= predicted > 0.05 * predicted.max()
+
+    def shadow_area(engine, tag):
+        scene.render.engine = engine
+        if engine != "CYCLES":
+            scene.eevee.taa_render_samples = 4
+        maps = illuminance_maps(scene, tmp_path, tag)
+        return int(np.sum(floor & (maps["floor"] < 0.5 * predicted)))
+
+    cycles = shadow_area("CYCLES", "cycles")
+    eevee = shadow_area(compat.eevee_engine_id(), "eevee")
+    print("shadow pixels: Cycles", cycles, "EEVEE", eevee, "lamps", len(info.lamps))
+    assert cycles > 20
+    assert abs(eevee - cycles) <= 0.1 * cycles
