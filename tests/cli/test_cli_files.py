@@ -450,12 +450,12 @@ def test_compute_of_a_blend_with_lights_takes_nonfinite_zero_as_without(tmp_path
     """``--nonfinite zero --lights 2`` on a .blend was refused ("repair the image first")
     although ``--nonfinite zero`` alone worked: the lights are taken from the same repaired
     image, as for an HDRI file."""
-    from cli_runs import build_blend
+    from farm_scene import build_scene
 
     pixels = constant_pixels(SKY)
     pixels[2, 3, 1] = np.nan
     hdri = write_exr(tmp_path / "nan.exr", pixels)
-    blend = build_blend(tmp_path / "nan.blend", hdri)
+    blend = build_scene(tmp_path / "nan.blend", hdri)
     line = one_error_line(run("compute", blend, "--lights", "2"))
     assert "pass --nonfinite zero to treat those texels as black" in line
     outs = []
