@@ -100,14 +100,6 @@ def test_no_import_points_up(graph):
     assert upward == []
 
 
-def test_features_do_not_import_each_other_upward(graph):
-    """Features sit side by side: one may use another (presets use the world's match), but
-    never ui, api or cli, which the general rule already covers; here: no feature imports ui."""
-    offenders = [f"{name} -> {target}" for name, targets in graph.items() for target in targets
-                 if LAYERS[part_of(name)] == 5 and part_of(target) == "blender.ui"]
-    assert offenders == []
-
-
 def test_the_command_line_uses_only_the_api(graph):
     reaching = [f"{name} -> {target}" for name, targets in graph.items()
                 if part_of(name) == "cli" for target in targets

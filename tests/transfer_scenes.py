@@ -2,6 +2,7 @@
 emitting exactly Σ L_lm Y_lm, and the materials a path-traced reference and a transfer render
 use."""
 
+import blender_scenes as scenes
 import bmesh
 import bpy
 import numpy as np
@@ -121,6 +122,18 @@ def camera(scene, location=(4.5, -4.5, 3.6), target=(0.0, 0.0, 0.3)):
     obj.rotation_euler = direction.to_track_quat("-Z", "Y").to_euler()
     scene.camera = obj
     return obj
+
+
+def lit_ground_and_box(ground_cuts, box_cuts):
+    """(scene, ground, box): ``ground_and_box`` seen by ``camera``, lit by ``LIGHTING`` stored
+    and emitted by the world, rendered at 48 px and 16 samples."""
+    scene = bpy.context.scene
+    ground, box = ground_and_box(ground_cuts, box_cuts)
+    camera(scene)
+    store_lighting(scene)
+    sh_world(scene)
+    scenes.setup_render(scene, size=48, samples=16)
+    return scene, ground, box
 
 
 def relative_rmse(estimate, reference, mask):

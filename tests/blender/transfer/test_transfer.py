@@ -30,13 +30,7 @@ def _bake(objects, samples=16):
 
 
 def _scene(ground_cuts=8, box_cuts=1):
-    scene = bpy.context.scene
-    ground, box = ts.ground_and_box(ground_cuts, box_cuts)
-    ts.camera(scene)
-    ts.store_lighting(scene)
-    ts.sh_world(scene)
-    scenes.setup_render(scene, size=48, samples=16)
-    return scene, ground, box
+    return ts.lit_ground_and_box(ground_cuts, box_cuts)
 
 
 def _object_mask(alpha):

@@ -25,13 +25,7 @@ def _select(objects, active=None):
 
 
 def _scene(ground_cuts=4, box_cuts=0):
-    scene = bpy.context.scene
-    ground, box = ts.ground_and_box(ground_cuts, box_cuts)
-    ts.camera(scene)
-    ts.store_lighting(scene)
-    ts.sh_world(scene)
-    scenes.setup_render(scene, size=48, samples=16)
-    return scene, ground, box
+    return ts.lit_ground_and_box(ground_cuts, box_cuts)
 
 
 def test_bake_then_the_panel_says_when_an_edit_made_it_stale(addon):
