@@ -24,6 +24,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import textwrap
 import time
 from pathlib import Path
 
@@ -145,8 +146,7 @@ def _median(values):
 
 
 def fragment(rows, load):
-    lines = [
-        "## Commands end to end: compute to each format, --lights 2, apply (1K-16K)", "",
+    intro = textwrap.wrap(
         f"`python -m benchmarks.bench_commands` ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
         f"load average {load}; 2 shared cores, CPU only). Each command as a user runs it "
         "(`python -m sh_lighting ...`) in a fresh process, on a 32-bit float ZIP EXR of the "
@@ -157,7 +157,10 @@ def fragment(rows, load):
         "process's own peak RSS (`os.wait4`), against the decoded image (H × W × 4 float32). "
         "d+r: decode + readback as timed inside the baseline process; base: the baseline "
         "process's wall time (it starts Python and bpy as a command does).",
-        "", f"Goals: {GOALS}.", "",
+        95, break_long_words=False, break_on_hyphens=False)
+    lines = [
+        "## Commands end to end: compute to each format, --lights 2, apply (1K-16K)", "",
+        *intro, "", f"Goals: {GOALS}.", "",
         "| size | what | time s | × d+r | × base | × compute | peak MB | × image |",
         "|---|---|---|---|---|---|---|---|"]
     for row in rows:

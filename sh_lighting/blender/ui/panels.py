@@ -305,8 +305,7 @@ class SHLIGHT_OT_show_channels(bpy.types.Operator):
                                              edits.luminance())[props.index]
             except ValueError:
                 pass
-        return (f"{COEFFICIENT_NAMES[props.index]}: {text}.\n{SWATCH_NOTE}.\nClick to show or "
-                "hide its R, G, B values")
+        return f"{text}.\n{SWATCH_NOTE}.\nClick to show or hide its R, G, B values"
 
     def execute(self, context):
         shown = getattr(context.window_manager, SHOW_CHANNELS)

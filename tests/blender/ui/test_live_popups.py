@@ -30,6 +30,7 @@ def invoke(cls, **given):
     op.properties = SimpleNamespace(is_property_set=lambda name: name in given)
     op.apply = lambda scene: cls.apply(op, scene)
     op.execute = lambda context: cls.execute(op, context)
+    op.message = lambda result: cls.message(op, result)
     return cls.invoke(op, bpy.context, None), op
 
 

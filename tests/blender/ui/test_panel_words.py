@@ -90,6 +90,7 @@ def test_apply_says_before_how_many_materials_beyond_the_selection_change(addon)
     """Keep BSDF, Apply To Selected, one of three objects selected: the line under Apply and
     the button's tooltip say 2 more materials change; Emission Only or Apply To All: no line."""
     three_objects()
+    bpy.context.scene.sh_lighting.apply_mode = "KEEP_BSDF"
     layout = RecordingLayout()
     panels.draw_main(layout, bpy.context)
     assert ("label", "Also 2 material(s) not selected", "INFO") in layout.calls
@@ -144,7 +145,7 @@ def test_the_panel_speaks_an_artists_words_first(addon):
     gains = [c for c in layout.of("prop") if c[2].endswith('_gain"]')]
     assert len(gains) == 9 and {c[3]["text"] for c in gains} == {"×"}
     tip = panels.SHLIGHT_OT_show_channels.description(bpy.context, SimpleNamespace(index=2))
-    assert tip.startswith("L10: ") and "swatch beside it is the term's colour" in tip
+    assert tip.startswith("L10 ") and not tip.startswith("L10: L10") and "swatch beside it is the term's colour" in tip
     gain_tip = scene_data.gain_description(2)
     assert gain_tip.startswith("Strength of the light from above vs below term (L10): 1 as "
                                "computed")
