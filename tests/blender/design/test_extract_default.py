@@ -17,6 +17,10 @@ from sh_lighting.blender.design import lights
 
 COUNTS = {"city": 1, "courtyard": 1, "forest": 2, "interior": 1, "night": 2, "studio": 3,
           "sunrise": 1, "sunset": 1}
+if bpy.app.version < (5, 0, 0):
+    # Blender 4.2 ships other images under the same names: its interior's brightest source
+    # lowers no error (test_sun_split), its studio and sunrise need one light more
+    COUNTS |= {"interior": 0, "studio": 4, "sunrise": 2}
 
 
 @pytest.mark.parametrize("name", sorted(COUNTS))

@@ -23,6 +23,11 @@ REAL_IES = ("bega_50988_lm63_1995.ies", "floodlight_12w_54deg.ies", "indoor_60w_
             "italo_1_5p5.ies", "maxwell_8_t4.ies")
 LDT = ("ledvance_fl_max_lum_600w_sym30.ldt", "road_luminaire.ldt", "projector.ldt",
        "fluorescent_luminaire.ldt", "wiki_batwing.ldt")
+# Blender 4.2's IES node reads three of these files up to 14 % above their candela (1.00 below
+# the lamp, 1.14 at grazing angles; 5.0 agrees to 0.4 %). The add-on's Cycles light is that
+# node in both (test_cycles_equals_hand_built_ies_node), so only the table itself is 5.0's.
+BLENDER_READS_THE_FILE = pytest.mark.skipif(
+    bpy.app.version < (5, 0, 0), reason="Blender 4.2's IES node departs from the file's table")
 
 
 def _add(scene, name, lamps=1):
@@ -66,6 +71,7 @@ def test_cycles_equals_hand_built_ies_node(name, tmp_path):
 TABLE_TOLERANCE = {"floor": 0.04, "wall": 0.07}
 
 
+@BLENDER_READS_THE_FILE
 @pytest.mark.parametrize("name", REAL_IES + LDT)
 def test_blender_reads_the_same_table(name, tmp_path):
     """Blender's IES node (the file, or the IES text an LDT becomes) rendered on a floor and
@@ -102,6 +108,7 @@ MEETS_FIVE_PERCENT = ("indoor_60w_ovni.ies", "ledvance_fl_max_lum_600w_sym30.ldt
 
 
 @pytest.mark.slow
+@BLENDER_READS_THE_FILE
 @pytest.mark.parametrize("name", REAL_IES + LDT)
 def test_fitted_lamps_against_the_exact_render(name, tmp_path):
     scene = scene_with_floor_and_wall()

@@ -7,6 +7,7 @@ from types import SimpleNamespace
 
 import bpy
 import numpy as np
+import pytest
 from blender_scenes import environment_world, run_execute
 from ui_layout import RecordingLayout
 
@@ -25,10 +26,12 @@ def _sphere_line(monkeypatch):
     return [c for c in layout.of("operator") if c[1] == "shlight.window"]
 
 
-def test_sunrise_and_grace_dip_below_zero_quietly(addon, hdri_dir, monkeypatch):
-    """Right after Compute on Blender's sunrise.exr (−4.6 %) and after loading Grace
-    Cathedral (−1.2 %): a quiet line with the depth, not a red error; the tooltip says where
-    and over how much of the sphere, and that smoothing costs elsewhere."""
+@pytest.mark.skipif(bpy.app.version < (5, 0, 0),
+                    reason="Blender 4.2's sunrise.exr is another image (−6 %)")
+def test_sunrise_dips_below_zero_quietly(addon, hdri_dir, monkeypatch):
+    """Right after Compute on Blender's sunrise.exr (−4.6 %): a quiet line with the depth, not
+    a red error; the tooltip says where and over how much of the sphere, and that smoothing
+    costs elsewhere."""
     scene = bpy.context.scene
     environment_world(scene, str(hdri_dir / "sunrise.exr"))
     assert bpy.ops.shlight.compute_from_world() == {"FINISHED"}
@@ -38,10 +41,15 @@ def test_sunrise_and_grace_dip_below_zero_quietly(addon, hdri_dir, monkeypatch):
     tooltip = design_ui.SHLIGHT_OT_window.description(bpy.context, props)
     assert "on surfaces facing below" in tooltip and "2.3 % of all directions" in tooltip
     assert "a small dip" in tooltip
+
+
+def test_grace_dips_below_zero_quietly(addon, monkeypatch):
+    """After loading Grace Cathedral (−1.2 %): the quiet line, whole at the default width."""
     grace = preset_io.shipped_preset_dir() / "grace_cathedral.json"
     assert bpy.ops.shlight.load_preset(filepath=str(grace)) == {"FINISHED"}
     [(_, _, _, kwargs)] = _sphere_line(monkeypatch)
     assert kwargs["text"] == "Slight negative light (-1.2 %)" and not kwargs["alert"]
+    assert kwargs["icon"] == "INFO"
     assert len(kwargs["text"]) <= 34  # reads in full in the sidebar at its default width
 
 
