@@ -18,3 +18,16 @@ def test_a_parameter_file_names_each_template_parameter_once(bundle):
     defined = {p["name"] for p in template["parameterDefinitions"]}
     assert sorted(names) == sorted(set(names)), f"{bundle}: a parameter listed twice: {names}"
     assert set(names) <= defined, f"{bundle}: {set(names) - defined} not in the template"
+
+
+def test_the_render_bundles_apply_mode_is_the_command_lines():
+    """ApplyMode offers apply --mode's choices, with its default (Edit World in Cycles)."""
+    from sh_lighting.choices import APPLY_MODES
+
+    template = yaml.safe_load((BUNDLES / "render" / "template.yaml").read_text())
+    (mode,) = [p for p in template["parameterDefinitions"] if p["name"] == "ApplyMode"]
+    assert mode["allowedValues"] == list(APPLY_MODES)
+    assert mode["default"] == APPLY_MODES[0]
+    values = yaml.safe_load((BUNDLES / "render" / "parameter_values.yaml").read_text())
+    (given,) = [p["value"] for p in values["parameterValues"] if p["name"] == "ApplyMode"]
+    assert given == APPLY_MODES[0]

@@ -19,7 +19,8 @@ import pytest
 from farm_jobs import (
     MAPS, ROOT, Job, check_frame, check_preset, error_lines, frame_names, tasks, write_maps,
 )
-from farm_scene import SKY_COEFFICIENTS, build_scene
+from farm_scene import SKY, SKY_COEFFICIENTS, build_scene, read_exr
+from numpy.testing import assert_allclose
 
 from sh_lighting.formats.presets import write_preset
 
@@ -193,6 +194,23 @@ def test_render_bundle_every_task(tmp_path, blender_command):
     for path in job.out.iterdir():
         check_frame(path)
     job.check_nothing_outside(before)  # the input .blend and preset unchanged
+
+
+def test_render_bundle_default_mode_edits_the_world_in_cycles(tmp_path, blender_command):
+    """The bundle's own ApplyMode (AUTO, apply's default): the Cycles shot gets Edit World, its
+    world the preset's sky (the preset has no coefficients of the world: they replace it)."""
+    job, blend, preset = render_job(tmp_path, blender_command)
+    params = job.params(BlendFile=str(blend), PresetFile=str(preset),
+                        OutputFolder=str(job.out), Frames="1-1", FramesPerTask=1)
+    status, blocks = job.run(params)
+    assert status == 0, blocks
+    (apply,) = [b for b in blocks if b["name"] == "ApplyPreset"]
+    assert apply["exit"] == 0
+    assert any(line.startswith("Edit World: world 'Plain' edited") for line in apply["lines"])
+    (task,) = tasks(blocks).values()
+    assert task["exit"] == 0, task["lines"]
+    pixels = read_exr(job.out / "shot_0001.exr")
+    assert_allclose(pixels[0, 0, :3], SKY, rtol=1e-4)  # not farm_scene.WORLD
 
 
 def test_render_output_name_cannot_leave_the_output_folder(tmp_path, blender_command):
