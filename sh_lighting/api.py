@@ -74,7 +74,7 @@ __all__ = [
     "WorldError", "AnimatedError", "compute_from_world", "get_coefficients", "get_computed", "get_provenance",
     "set_coefficients",
     "reset", "ensure_node_group", "apply_to_materials", "remove_from_materials",
-    "edit_world", "remove_world_edit",
+    "edit_world", "edit_world_report", "remove_world_edit",
     # presets and interop
     "FORMATS", "PresetError", "export_preset", "import_preset", "shipped_presets",
     "user_presets", "save_user_preset", "remove_user_preset",
@@ -299,6 +299,12 @@ def edit_world(scene=None):
     Apply in Cycles, docs/blender.md); returns the ``core.world_edit.Clamping`` measured.
     A ValueError, nothing changed, when the world cannot be edited."""
     return _world_edit.edit_world(scene or bpy.context.scene)
+
+
+def edit_world_report(scene, clamping):
+    """What Apply says after ``edit_world``: (its line on the edited world, the clamp's line
+    or None when the clamp changed next to nothing)."""
+    return _world_edit.applied_message(scene, clamping), _world_edit.clamping_note(clamping)
 
 
 def remove_world_edit(scene=None):

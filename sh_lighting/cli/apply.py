@@ -1,28 +1,33 @@
-"""``apply PRESET [BLEND]``: a preset's coefficients set on a .blend's scene and the SH node
-group applied to its materials, saved to a new file or in place."""
+"""``apply PRESET [BLEND]``: a preset's coefficients set on a .blend's scene and applied as the
+panel's Apply does (``--mode``, the default by the scene's render engine: Edit World or the SH
+node group on its materials), saved to a new file or in place."""
 
-from .options import add_blend_output, add_mode, add_scene
+from ..choices import APPLY_MODE_ITEMS, resolve_mode
+from .options import add_apply_mode, add_blend_output, add_scene
 from .paths import blend_relative, changed_alone, input_file
 from .report import CommandError, say
 from .session import open_blend, open_file, output_blend, pick_scene, save_and_say
 
-HELP = "set a preset in a .blend and apply the SH node group to its materials"
+HELP = "set a preset in a .blend and apply it (Edit World, or the SH group on its materials)"
 
 
 def add_arguments(p, prog):
     p.description = (
-        "Set the scene's coefficients from PRESET and add the SH Irradiance node group to the "
-        "materials of all objects of the scene (or of --objects), then save to --out (a new "
-        "file) or over the input with --in-place.")
+        "Set the scene's coefficients from PRESET and apply them as the panel's Apply does: "
+        "by default (--mode AUTO) Edit World in Cycles (the designed change added to the "
+        "world; the materials untouched) and the SH Irradiance node group on the materials of "
+        "all objects of the scene (or of --objects) in EEVEE (Keep BSDF); then save to --out "
+        "(a new file) or over the input with --in-place.")
     p.epilog = f"example:\n  {prog} apply forest.json shot.blend --out shot_sh.blend"
     p.add_argument("preset", metavar="PRESET", help="SH Lighting preset (.json)")
     p.add_argument("blend", metavar="BLEND", nargs="?",
                    help=".blend file to change (under blender -P: default the open one)")
     add_blend_output(p)
     p.add_argument("--objects", nargs="+", metavar="NAME",
-                   help="only the materials of these objects (default: every object)")
+                   help="only the materials of these objects (default: every object; the "
+                   "material modes only: Edit World lights every object)")
     add_scene(p, "scene to change")
-    add_mode(p)
+    add_apply_mode(p)
     p.add_argument(
         "--animation", choices=("refuse", "key", "clear"), default="refuse",
         help="when the scene's sh_L.. coefficients or gains are keyframed or driven: refuse "
@@ -51,6 +56,12 @@ def apply_and_save(args, preset, out):
 
     open_blend(args.blend, load_ui=True)  # saved again: keep the user's layout
     scene = pick_scene(args.scene)
+    mode = resolve_mode(args.mode, scene.render.engine)
+    if mode == "WORLD" and args.objects:
+        raise CommandError(
+            f"--objects picks materials, but --mode {args.mode} is Edit World here (scene "
+            f"'{scene.name}' renders with {scene.render.engine}), which changes the world and "
+            "lights every object: leave --objects out, or give --mode KEEP_BSDF or EMISSION")
     objects = objects_to_apply(scene, args.objects)
     try:  # what the UI's Load and Import do (the preset's name recorded from its metadata)
         note = api.import_preset(scene, preset, args.animation.upper()).note
@@ -61,7 +72,42 @@ def apply_and_save(args, preset, out):
                            .replace("(animation='CLEAR', ", "(")) from None
     if note:
         say(f"SH lighting {note}")
-    result = api.apply_to_materials(api.materials_of(objects), scene, args.mode)
+    label = dict((key, name) for key, name, _text in APPLY_MODE_ITEMS)[mode]
+    if args.mode != mode:
+        say(f"mode {args.mode}: {label} (scene '{scene.name}' renders with "
+            f"{scene.render.engine})")
+    if mode == "WORLD":
+        edit_world(scene)
+    else:
+        apply_to_materials(scene, objects, mode)
+    save_and_say(args, out)
+    return 0
+
+
+def edit_world(scene):
+    """Edit World, and the SH taken out of the scene's materials (the edited world lights them:
+    nothing counted twice), as the panel's Apply does."""
+    from .. import api
+
+    try:
+        clamping = api.edit_world(scene)
+    except (LookupError, ValueError) as error:
+        raise CommandError(str(error)) from None
+    message, clamped = api.edit_world_report(scene, clamping)
+    say(message)
+    taken = api.remove_from_materials(api.materials_of(scene.objects)).changed
+    if taken:
+        say(f"SH lighting taken out of {len(taken)} material(s): the edited world lights them")
+    if clamped:
+        say(f"warning: {clamped}")
+
+
+def apply_to_materials(scene, objects, mode):
+    """The SH group on the materials of ``objects`` in ``mode`` (and any World Edit taken out
+    of the world: the materials light it now)."""
+    from .. import api
+
+    result = api.apply_to_materials(api.materials_of(objects), scene, mode)
     for name, reason in result.skipped:
         say(f"skipped material '{name}': {reason}")
     for name in api.objects_without_material(objects):
@@ -70,13 +116,13 @@ def apply_and_save(args, preset, out):
         raise CommandError(
             f"no material was changed ({len(result.skipped)} skipped): nothing saved"
         )
+    if api.remove_world_edit(scene):
+        say(f"World Edit taken out of world '{scene.world.name}': the materials light it now")
     say(f"SH lighting applied to {len(result.changed)} material(s): "
         + ", ".join(result.changed))
-    if args.mode == "KEEP_BSDF":
+    if mode == "KEEP_BSDF":
         for line in api.shared_scene_notes(scene, result.changed):
             say(f"warning: {line}")
-    save_and_say(args, out)
-    return 0
 
 
 def read_preset_argument(text, blend):

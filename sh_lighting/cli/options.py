@@ -3,7 +3,7 @@
 import argparse
 import re
 
-from ..choices import MATERIAL_MODES
+from ..choices import APPLY_MODES, MATERIAL_MODES
 
 
 def whole_range(text):
@@ -61,9 +61,21 @@ def add_scene(parser, what="scene of the .blend"):
 
 
 def add_mode(parser):
-    """``apply --mode``: keep the BSDF (default) or drive the surface by the SH emission."""
+    """``bake-transfer --mode``: keep the BSDF (default) or drive the surface by the SH emission."""
     parser.add_argument(
         "--mode", choices=MATERIAL_MODES, default=MATERIAL_MODES[0],
         help="KEEP_BSDF (default): materials keep their BSDF (lamps, shadows, reflections) and "
         "SH replaces the world's diffuse light, which the world then no longer gives to "
         "diffuse rays (Cycles); EMISSION: the SH emission alone drives the surface")
+
+
+def add_apply_mode(parser):
+    """``apply --mode``: the panel's Apply modes (``choices.APPLY_MODES``), its default first."""
+    parser.add_argument(
+        "--mode", choices=APPLY_MODES, default=APPLY_MODES[0],
+        help="AUTO (default): as the panel's Default, by the scene's render engine: WORLD in "
+        "Cycles, KEEP_BSDF in EEVEE; WORLD (Edit World): the designed change is added to the "
+        "world itself, the materials stay as they are (path-traced shadows, bounces and "
+        "reflections); KEEP_BSDF: materials keep their BSDF (lamps, shadows, reflections) and "
+        "SH replaces the world's diffuse light; EMISSION: the SH emission alone drives the "
+        "surface")

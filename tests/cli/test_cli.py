@@ -162,7 +162,7 @@ def test_apply_refusals_leave_no_file(inputs, tmp_path):
     assert taken.read_bytes() == b"keep"
 
     result = run("apply", inputs["preset"], inputs["blend"], "--out", tmp_path / "o.blend",
-                 "--objects", "Ball", "Nope")
+                 "--objects", "Ball", "Nope", "--mode", "KEEP_BSDF")
     assert result.returncode == 1 and "no object(s) 'Nope'" in result.stderr
 
     broken = tmp_path / "broken.json"
@@ -175,7 +175,8 @@ def test_apply_refusals_leave_no_file(inputs, tmp_path):
 def test_apply_in_place_and_named_objects(inputs, tmp_path):
     blend = tmp_path / "copy.blend"
     blend.write_bytes(inputs["blend"].read_bytes())
-    result = run("apply", inputs["preset"], blend, "--in-place", "--objects", "Ball")
+    result = run("apply", inputs["preset"], blend, "--in-place", "--objects", "Ball",
+                 "--mode", "KEEP_BSDF")
     assert result.returncode == 0, result.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["copy.blend"]
     bpy.ops.wm.open_mainfile(filepath=str(blend))

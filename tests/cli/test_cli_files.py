@@ -16,7 +16,7 @@ from numpy.testing import assert_allclose
 
 from sh_lighting import cli
 from sh_lighting.cli import render
-from sh_lighting.blender.shading import materials
+from sh_lighting.blender import world_edit
 from sh_lighting.blender.data import scene_data
 from sh_lighting.formats.presets import read_preset, write_preset
 
@@ -112,7 +112,7 @@ def test_apply_keeps_the_users_workspaces(inputs, tmp_path):
     bpy.ops.wm.open_mainfile(filepath=str(out), load_ui=True)
     names = {w.name for w in bpy.data.workspaces}
     assert "My Layout" in names and "Layout" not in names and "Shading" not in names
-    assert materials.is_applied(bpy.data.materials["Grey"])
+    assert world_edit.is_edited(bpy.context.scene.world)  # the default in Cycles
 
 
 def test_in_place_through_a_symlink_keeps_the_link_and_the_mode(inputs, tmp_path):
