@@ -61,6 +61,8 @@ bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_tables
 	$(PY) -m benchmarks.report
 	$(PY) -m benchmarks.bench_real_scene
+	$(PY) -m benchmarks.bench_world_edit
+	$(PY) -m benchmarks.bench_eevee_default
 	$(PY) -m benchmarks.bench_sizes
 	$(PY) -m benchmarks.bench_photo
 	$(PY) -m benchmarks.fragments

@@ -17,7 +17,8 @@ WIDTH = 100
 
 # Written by: report.py (methods), by hand (node_group, *_reading), bench_lights (lights),
 # bench_transfer (transfer, transfer_equal_error), bench_photo (photo), bench_sizes (sizes),
-# bench_real_scene (real_scene), the commands' benchmark (commands).
+# bench_real_scene (real_scene), bench_world_edit (world_edit), bench_eevee_default
+# (eevee_default), the commands' benchmark (commands).
 ORDER = (
     "methods",
     "node_group",
@@ -31,6 +32,8 @@ ORDER = (
     "sizes_reading",
     "real_scene",
     "real_scene_reading",
+    "world_edit",
+    "eevee_default",
     "commands",
 )
 
