@@ -34,6 +34,7 @@ ORDER = (
     "real_scene_reading",
     "world_edit",
     "eevee_default",
+    "eevee_default_reading",
     "commands",
 )
 
