@@ -40,7 +40,9 @@ FILAMENT_FRAMES = {
     "gltf": "a glTF export of the Blender scene",
 }
 # What Apply does (blender.ui.operators); the first is the default: "AUTO" resolves per render
-# engine at Apply time (``resolve_mode``): Edit World in Cycles, Keep BSDF in EEVEE
+# engine at Apply time (``resolve_mode``): Edit World in Cycles, Keep BSDF in EEVEE (measured:
+# benchmarks/bench_eevee_default.py, World Edit there is EEVEE's own world lighting, the less
+# accurate on two HDRIs of three)
 APPLY_MODES = ("AUTO", "WORLD", "KEEP_BSDF", "EMISSION")
 # The modes that change materials (blender.shading.materials; the command line's --mode)
 MATERIAL_MODES = ("KEEP_BSDF", "EMISSION")
