@@ -30,21 +30,43 @@ def test_ldt_equals_pyldt(name):
 
 
 def test_ldt_files_cover_every_symmetry():
-    assert {LdtReader.read(DATA / n).header.isym for n in LDT_FILES} == {0, 1, 2, 3, 4}
+    """The real files are Isym 0, 1 and 4; 2 and 3 are made in the test below."""
+    assert {LdtReader.read(DATA / n).header.isym for n in LDT_FILES} == {0, 1, 4}
 
 
-def test_ies_real_files_known_values():
-    """Numbers read off the files by eye: nadir, multiplier, 1995 and 2002 headers."""
+@pytest.mark.parametrize("isym", [0, 1, 2, 3, 4])
+def test_synthetic_ldt_every_symmetry_equals_pyldt(isym, tmp_path):
+    """A made-up distribution, different in every stored plane and angle, in each symmetry."""
+    mc, ng = 8, 5
+    planes = {0: mc, 1: 1, 2: mc // 2 + 1, 3: mc // 2 + 1, 4: mc // 4 + 1}[isym]
+    values = [f"{100 + 10 * k + j * (j + 1):.1f}" for k in range(planes) for j in range(ng)]
+    path = tmp_path / f"isym{isym}.ldt"
+    path.write_text(ldt(isym=isym, mc=mc, ng=ng, intensities=values))  # γ 0, 45, ..., 180
+    other = LdtReader.read(path)
+    assert other.header.isym == isym
+    table = read_photometry(path)
+    h = other.header
+    reference = np.array(other.intensities) * h.lamp_flux[0] / 1000.0 * h.conv_factor
+    gamma = np.array(h.g_angles)
+    ours = np.stack([table.at(gamma, np.full_like(gamma, c)) for c in h.c_angles])
+    assert reference.std() > 0
+    assert np.abs(ours - reference).max() <= SAME * reference.max()
+
+
+def test_real_files_known_values():
+    """Numbers read off the files by eye: nadir, 1995 and 2002 headers, TILT=INCLUDE."""
     bega = read_photometry(DATA / "bega_50988_lm63_1995.ies")
     assert bega.at(0.0, 123.0) == pytest.approx(2225.9)
     assert bega.at(90.0, 0.0) == pytest.approx(0.0)
     assert bega.at(100.0, 0.0) == 0.0  # above the last vertical angle: dark, as in Cycles
-    ovni = read_photometry(DATA / "indoor_60w_ovni.ies")  # candela multiplier 0.4597
-    assert ovni.at(0.0, 0.0) == pytest.approx(4170.2998 * 0.4597, rel=SAME)  # line 22
-    assert ovni.at(0.5, 90.0) == pytest.approx(4169.2002 * 0.4597, rel=SAME)
-    assert ovni.flux_lm == pytest.approx(5300, rel=0.01)  # the file's name: 5300 lm
-    tilted = read_photometry(DATA / "tilt_include_synthetic.ies")
-    assert tilted.at(0.0, 0.0) == pytest.approx(1000.0)
+    example = read_photometry(DATA / "lm63_2002_example_tilt.ies")  # the standard's example
+    assert example.at(0.0, 0.0) == pytest.approx(100000.0)
+    assert example.at(22.5, 45.0) == pytest.approx(35000.0)
+    assert example.at(90.0, 90.0) == pytest.approx(1000.0)
+    cie = read_photometry(DATA / "ugr_sample_11.ldt")  # CIE 190 example, 1000 lm lamp
+    assert cie.at(0.0, 0.0) == pytest.approx(264.0, rel=SAME)
+    prolicht = read_photometry(DATA / "prolicht_e30_0019.ldt")
+    assert prolicht.flux_lm == pytest.approx(5134, rel=0.01)  # integrates to line 29's 5134 lm
 
 
 @pytest.mark.parametrize("name", IES_FILES + LDT_FILES)
