@@ -11,7 +11,15 @@ Which set renders follows the engine with switches each engine honours and the o
 (measured on 5.0, docs/blender.md): the luminaire's Diffuse/Specular/Volume/Transmission
 factors are 0, which EEVEE obeys and Cycles ignores; the fitted lamps' node trees emit with
 Strength 0, which Cycles obeys and EEVEE ignores. The lamps' power and colour are driven by the
-luminaire's (simple-expression drivers, no scripts), so one Power and one Color set both.
+luminaire's (simple-expression drivers, no scripts), so one Power and one Color set both;
+so is Blender's Light Temperature where Blender has it (5.0), and ``set_colour_temperature``
+sets either it or, before 5.0, the colour to the blackbody's (``core.blackbody``).
+
+The luminaire's nine (``luminaire_sh_at``): seen from a point p, it is a source of irradiance
+E₀ = I(−s)/r² from the direction s toward it (r its distance, I in W/sr: the candela × the
+power / 177.83, times its colour), whose radiance terms are L_lm = E₀ Y_lm(s), Blender world
+axes: what it adds to the scene's nine at p (E(n) = Σ Â_l L_lm Y_lm(n), Ramamoorthi and
+Hanrahan 2001).
 
 Power: Blender's IES node gives v cd as Strength v·4π/177.83 (D65's 177.83 lm/W), so the
 luminaire at 1 W renders the file's absolute candela; a fitted lamp of on-axis intensity c cd
@@ -26,8 +34,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import bpy
+import numpy as np
 from mathutils import Matrix, Vector
 
+from ...core.blackbody import blackbody_rgb
 from ...core.lamp_fit import fit_lamps, plane_illuminance_error, sphere_samples
 from ...core.sh import sh_basis
 from ...formats.ies import parse_ies
@@ -43,13 +53,16 @@ __all__ = (
     "lamps_of",
     "luminaire_of",
     "luminaire_sh",
+    "luminaire_sh_at",
     "refit",
     "remove_luminaire",
+    "set_colour_temperature",
 )
 
 REGISTRY = "sh_lighting_luminaires"  # scene property: {key: {"root", "lamps", "text"}}
 INFO = "sh_luminaire"  # the luminaire light's read-only summary (a custom property)
-CANDELA_TO_WATT = 4.0 * math.pi / 177.83  # Blender's IES node: Strength per candela
+LUMENS_PER_WATT = 177.83  # Blender's IES node: D65's luminous efficacy
+CANDELA_TO_WATT = 4.0 * math.pi / LUMENS_PER_WATT  # Blender's IES node: Strength per candela
 FACTORS = ("diffuse_factor", "specular_factor", "volume_factor", "transmission_factor")
 
 
@@ -230,6 +243,9 @@ def _make_lamps(root, collection, lamps, radius):
         _drive(data, "energy", root, "data.energy", f"var * {lamp.candela * CANDELA_TO_WATT!r}")
         for channel in range(3):
             _drive(data, "color", root, f"data.color[{channel}]", "var", channel)
+        if hasattr(data, "temperature"):  # Blender 5.0's Light Temperature
+            _drive(data, "use_temperature", root, "data.use_temperature", "var")
+            _drive(data, "temperature", root, "data.temperature", "var")
         obj = bpy.data.objects.new(name, data)
         obj.parent = root
         obj.rotation_mode = "QUATERNION"
@@ -264,6 +280,49 @@ def _delete_lamps(lamps):
         bpy.data.objects.remove(lamp)
         if data is not None and data.users == 0:
             bpy.data.lights.remove(data)
+
+
+TEMPERATURE_RANGE = (800.0, 20000.0)  # kelvin, Blender's Light Temperature's range
+
+
+def set_colour_temperature(root, kelvin):
+    """The luminaire's colour: a blackbody at ``kelvin``, in both engines (see above)."""
+    low, high = TEMPERATURE_RANGE
+    if not isinstance(kelvin, (int, float)) or not low <= kelvin <= high:
+        raise ValueError(f"colour temperature {kelvin!r} K: from {low:.0f} to {high:.0f} K")
+    data = root.data
+    if hasattr(data, "temperature"):
+        data.use_temperature = True
+        data.temperature = float(kelvin)
+    else:
+        data.color = tuple(float(v) for v in blackbody_rgb(kelvin))
+
+
+def light_colour(data):
+    """The RGB a light emits per unit power: its colour × its temperature's where it has one."""
+    colour = np.array(data.color, dtype=np.float64)
+    if getattr(data, "use_temperature", False):
+        colour = colour * blackbody_rgb(data.temperature)
+    return colour
+
+
+def luminaire_sh_at(scene, root, point):
+    """The nine (9, 3) the luminaire ``root`` adds at ``point`` (world), see above; zeros
+    where it is at the point itself."""
+    entry = _entry(scene, root)
+    if entry is None:
+        raise ValueError(f"'{root.name}' is not a measured luminaire this add-on made")
+    table = parse_ies(entry["text"].as_string(), entry["text"].name)
+    world = root.matrix_world
+    to_point = Vector(point) - world.translation
+    r = to_point.length
+    if r < 1e-6:
+        return np.zeros((9, 3))
+    local = world.to_3x3().normalized().inverted() @ (to_point / r)
+    watts_per_sr = float(table.intensity(np.array([tuple(local)]))[0]) * root.data.energy
+    e0 = watts_per_sr / LUMENS_PER_WATT / (r * r)
+    toward = -np.array(to_point / r)
+    return e0 * np.outer(sh_basis(toward[None, :], 2)[0], light_colour(root.data))
 
 
 def luminaire_sh(table, n_theta=90, n_phi=180):

@@ -3,6 +3,8 @@
 import bpy
 from bpy_extras.io_utils import ImportHelper
 
+from ...core.sh import COEFFICIENT_NAMES
+from ..data import scene_data
 from ..luminaire import build
 from .polls import scene_poll
 
@@ -115,6 +117,56 @@ class SHLIGHT_OT_remove_luminaire(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class SHLIGHT_OT_luminaire_temperature(bpy.types.Operator):
+    """Colour the luminaire as a blackbody at a temperature, in Cycles and EEVEE (Blender's
+    Light Temperature where it has one, else the colour)"""
+
+    bl_idname = "shlight.luminaire_temperature"
+    bl_label = "Colour Temperature"
+    bl_options = {"REGISTER", "UNDO"}
+
+    kelvin: bpy.props.FloatProperty(
+        name="Temperature", default=3000.0, min=build.TEMPERATURE_RANGE[0],
+        max=build.TEMPERATURE_RANGE[1], subtype="TEMPERATURE" if bpy.app.version >= (4, 0, 0)
+        else "NONE", description="Blackbody temperature in kelvin (2700 warm, 6500 daylight)")
+
+    @classmethod
+    def poll(cls, context):
+        return _luminaire_poll(cls, context)
+
+    def execute(self, context):
+        try:
+            build.set_colour_temperature(context.object, float(self.kelvin))
+        except ValueError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        context.object.data.update_tag()
+        return {"FINISHED"}
+
+
+def draw_nine(layout, context, root):
+    """The scene's nine beside the ones the luminaire adds at the 3D cursor (R G B)."""
+    scene = context.scene
+    try:
+        own = build.luminaire_sh_at(scene, root, tuple(scene.cursor.location))
+    except ValueError as error:
+        layout.label(text=str(error), icon="ERROR")
+        return
+    try:
+        ours = scene_data.get_coefficients(scene)
+    except (LookupError, ValueError):
+        ours = None
+    col = layout.column(align=True)
+    col.label(text="SH at the 3D cursor (R G B): scene | this luminaire adds")
+    for index, name in enumerate(COEFFICIENT_NAMES):
+        row = col.row(align=True)
+        split = row.split(factor=0.14)
+        split.label(text=name)
+        split = split.split(factor=0.5)
+        split.label(text=" ".join(f"{v:.3g}" for v in ours[index]) if ours is not None else "-")
+        split.label(text=" ".join(f"{v:.3g}" for v in own[index]))
+
+
 class SHLIGHT_PT_luminaire(bpy.types.Panel):
     """The luminaire's file, flux, fit errors and SH coefficients (Light properties)."""
 
@@ -138,6 +190,14 @@ class SHLIGHT_PT_luminaire(bpy.types.Panel):
         col.label(text=f"Flux {info.get('flux_lm', 0):.0f} lm, peak {info.get('peak_cd', 0):.0f} cd")
         layout.prop(light, "energy", text="Intensity (1 W = the file's candela)")
         layout.prop(light, "color")
+        row = layout.row(align=True)
+        if hasattr(light, "temperature"):  # Blender 5.0: the lamps follow it by drivers
+            row.prop(light, "use_temperature", text="")
+            sub = row.row(align=True)
+            sub.active = light.use_temperature
+            sub.prop(light, "temperature")
+        else:
+            row.operator(SHLIGHT_OT_luminaire_temperature.bl_idname, icon="LIGHT_SUN")
         box = layout.box()
         box.label(text=f"EEVEE: {info.get('lamps', 0)} lamp(s), Cycles: the IES node (exact)")
         box.label(text=f"Intensity error {100 * info.get('intensity_error', 0):.1f} % "
@@ -147,14 +207,7 @@ class SHLIGHT_PT_luminaire(bpy.types.Panel):
         row = layout.row(align=True)
         row.operator(SHLIGHT_OT_refit_luminaire.bl_idname, icon="FILE_REFRESH")
         row.operator(SHLIGHT_OT_remove_luminaire.bl_idname, icon="TRASH")
-        sh = list(info.get("sh", []))
-        if len(sh) == 9:
-            col = layout.column(align=True)
-            col.label(text="SH coefficients of I(ω), light axes (cd·sr):")
-            names = ("L00", "L1-1", "L10", "L11", "L2-2", "L2-1", "L20", "L21", "L22")
-            for start in (0, 3, 6):
-                col.label(text="   ".join(f"{n} {v:.4g}" for n, v in
-                                          zip(names[start:start + 3], sh[start:start + 3])))
+        draw_nine(layout, context, context.object)
 
 
 def draw_add_menu(self, context):
@@ -162,7 +215,7 @@ def draw_add_menu(self, context):
 
 
 classes = (SHLIGHT_OT_add_luminaire, SHLIGHT_OT_refit_luminaire, SHLIGHT_OT_remove_luminaire,
-           SHLIGHT_PT_luminaire)
+           SHLIGHT_OT_luminaire_temperature, SHLIGHT_PT_luminaire)
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
 
 

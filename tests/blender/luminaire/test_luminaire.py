@@ -229,3 +229,85 @@ def test_eevee_shadow_matches_cycles(tmp_path):
     print("shadow pixels: Cycles", cycles, "EEVEE", eevee, "lamps", len(info.lamps))
     assert cycles > 20
     assert abs(eevee - cycles) <= 0.1 * cycles
+
+
+def test_colour_temperature_in_both_engines(tmp_path):
+    """Cycles renders the luminaire's light × the blackbody's red (Blender's own colour for
+    that temperature), the EEVEE lamps follow it."""
+    from sh_lighting.core.blackbody import blackbody_rgb
+
+    scene = scene_with_floor_and_wall()
+    info = _add(scene, "ugr_sample_05.ldt", lamps=2)
+    white = illuminance_maps(scene, tmp_path, "white")["floor"]
+    build.set_colour_temperature(info.root, 3000.0)
+    bpy.context.view_layer.update()
+    warm = illuminance_maps(scene, tmp_path, "warm")["floor"]
+    lit = white > 0.01 * white.max()
+    red = blackbody_rgb(3000.0)[0]
+    assert red > 1.5
+    assert np.abs(warm[lit] / white[lit] - red).max() <= 1e-3 * red
+    expected = tuple(blackbody_rgb(3000.0))
+    for lamp in info.lamps:
+        colour = build.light_colour(lamp.data)
+        assert tuple(colour) == pytest.approx(expected, rel=1e-5)
+    with pytest.raises(ValueError, match="from 800 to 20000 K"):
+        build.set_colour_temperature(info.root, float("nan"))
+
+
+def test_luminaire_nine_equal_the_rendered_irradiance(tmp_path):
+    """Its nine at a floor point give E₀ = L00/Y00 (the irradiance facing it); Cycles' floor
+    there is E₀ cos θ. Moved and turned, the luminaire's nine follow."""
+    from sh_lighting.core.sh import Y00
+
+    scene = scene_with_floor_and_wall()
+    info = _add(scene, "prolicht_e30_0019.ldt")  # Isym 0: turning it matters
+    info.root.rotation_euler = (0.3, 0.0, 0.7)
+    info.root.data.energy = 2.5
+    bpy.context.view_layer.update()
+    floor = illuminance_maps(scene, tmp_path, "floor")["floor"]
+    u = (np.arange(floor.shape[0]) + 0.5) / floor.shape[0] * 4 * HEIGHT - 2 * HEIGHT
+    for row, column in ((20, 25), (30, 12), (10, 33)):
+        point = np.array([u[column], -u[row], 0.0])
+        nine = build.luminaire_sh_at(scene, info.root, point)
+        assert nine.shape == (9, 3) and np.allclose(nine[:, 0], nine[:, 2])  # white
+        toward = np.array(info.root.location) - point
+        cosine = toward[2] / np.linalg.norm(toward)
+        e0 = nine[0, 0] / Y00
+        assert floor[row, column] > 0.05 * floor.max()
+        # Cycles interpolates the table cubically, the reader bilinearly (measured ≤ 1.2 %)
+        assert e0 * cosine == pytest.approx(floor[row, column], rel=0.015)
+
+
+def test_panel_shows_both_nines_and_the_temperature(addon):
+    """The panel: Blender's Temperature (or the operator), and per term the scene's R G B
+    beside what the luminaire adds at the 3D cursor."""
+    from types import SimpleNamespace
+
+    from ui_layout import RecordingLayout
+
+    from sh_lighting.blender.data import scene_data
+    from sh_lighting.blender.ui import luminaire as ui
+
+    scene = bpy.context.scene
+    scene_data.store(scene, np.full((9, 3), 0.25), {"source": "SCRIPT"})
+    info = build.add_luminaire(scene, DATA / "ugr_sample_05.ldt", location=(0.0, 0.0, 2.0),
+                               settings=build.FitSettings(max_lamps=1))
+    scene.cursor.location = (0.5, 0.0, 0.0)
+    bpy.context.view_layer.update()  # its matrix_world
+    layout = RecordingLayout()
+    ui.SHLIGHT_PT_luminaire.draw(SimpleNamespace(layout=layout),
+                                 SimpleNamespace(scene=scene, object=info.root))
+    own = build.luminaire_sh_at(scene, info.root, (0.5, 0.0, 0.0))
+    labels = [c[1] for c in layout.of("label")]
+    at = labels.index("L00")
+    assert labels[at + 1] == "0.25 0.25 0.25"
+    assert labels[at + 2] == " ".join(f"{v:.3g}" for v in own[0]) and own[0, 0] > 0
+    assert labels[labels.index("L21") + 2] == " ".join(f"{v:.3g}" for v in own[7])
+    assert abs(own[7, 0]) > 0.01 * own[0, 0]  # off to the side: a directional term
+    if hasattr(info.root.data, "temperature"):
+        assert ("temperature" in [c[2] for c in layout.of("prop")])
+    else:
+        assert ui.SHLIGHT_OT_luminaire_temperature.bl_idname in layout.operators()
+    bpy.context.view_layer.objects.active = info.root
+    assert bpy.ops.shlight.luminaire_temperature(kelvin=2700.0) == {"FINISHED"}
+    assert build.light_colour(info.root.data)[0] > 1.5  # warm
