@@ -38,7 +38,8 @@ import numpy as np
 from mathutils import Matrix, Vector
 
 from ...core.blackbody import blackbody_rgb
-from ...core.lamp_fit import fit_lamps, plane_illuminance_error, sphere_samples
+from ...core.lamp_fit import fit_lamps, lamp_intensity, plane_illuminance_error, sphere_samples
+from ...core.polar_plot import polar_curves
 from ...core.sh import sh_basis
 from ...formats.ies import parse_ies
 from ...formats.photometric_file import read_with_ies_text
@@ -343,5 +344,19 @@ def _store_info(root, table, fit, plane, settings, source):
         "error_target": settings.error_target,
         "max_lamps": settings.max_lamps,
         "sh": [float(v) for v in luminaire_sh(table)],
+        # the polar diagram's curves (core.polar_plot), the file's and the fitted lamps'
+        "polar_file": [float(v) for v in polar_curves(table.intensity).ravel()],
+        "polar_fit": [float(v) for v in polar_curves(
+            lambda dirs: lamp_intensity(fit.lamps, dirs)).ravel()],
     }
+
+
+def polar_of(root):
+    """(the file's, the fit's) polar curves (2, 2, 181) stored with the luminaire, or None."""
+    info = root.data.get(INFO, {})
+    if "polar_file" not in info or "polar_fit" not in info:
+        return None
+    shape = (2, 2, -1)
+    return (np.array(info["polar_file"], dtype=np.float64).reshape(shape),
+            np.array(info["polar_fit"], dtype=np.float64).reshape(shape))
 

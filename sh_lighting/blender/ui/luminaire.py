@@ -6,6 +6,7 @@ from bpy_extras.io_utils import ImportHelper
 from ...core.sh import COEFFICIENT_NAMES
 from ..data import scene_data
 from ..luminaire import build
+from . import previews
 from .polls import scene_poll
 
 NOT_OURS = "Select a measured luminaire made by Add > Light > Measured Luminaire"
@@ -204,6 +205,16 @@ class SHLIGHT_PT_luminaire(bpy.types.Panel):
                        "(relative RMS over the sphere)")
         box.label(text=f"Illuminance error {100 * info.get('plane_error', 0):.1f} % on a plane "
                        f"{info.get('check_distance', 0):.2f} m below")
+        curves = build.polar_of(context.object)
+        if curves is not None:
+            try:
+                icon = previews.polar(context.object.name, *curves).icon_id
+            except (RuntimeError, ValueError) as error:  # not registered, bad stored curves
+                box.label(text=str(error), icon="ERROR")
+            else:
+                box.template_icon(icon_value=icon, scale=8.0)
+                box.label(text="Polar: red C0-C180, blue C90-C270; thick the file, "
+                               "thin the EEVEE lamps")
         row = layout.row(align=True)
         row.operator(SHLIGHT_OT_refit_luminaire.bl_idname, icon="FILE_REFRESH")
         row.operator(SHLIGHT_OT_remove_luminaire.bl_idname, icon="TRASH")

@@ -10,6 +10,7 @@ import bpy
 import bpy.utils.previews
 import numpy as np
 
+from ...core.polar_plot import polar_image
 from ...core.preview import (
     basis_sphere_images,
     fit_exposure,
@@ -25,6 +26,7 @@ SWATCH_SIZE = 16
 PHOTO_SIZE = 160  # the Match Photo dialog's thumbnail: its longer side, px
 PHOTO_NAME = "photo"
 RING = (1.0, 0.25, 0.1)  # the circle drawn on it
+POLAR_SIZE = 128  # a measured luminaire's polar diagram, px
 
 # Blender's previews live in a collection that the add-on must hold from register() to
 # unregister() (bpy.utils.previews), so the module keeps that one reference; what the
@@ -162,6 +164,20 @@ def photo(path, pixels, circle):
     return preview
 
 
+def polar(name, measured, fitted):
+    """The ``ImagePreview`` of a luminaire's polar diagram (``core.polar_plot``: the file's
+    curves against the fitted lamps'), redrawn only when the curves change."""
+    pcoll = collection()
+    key = f"polar_{name}"
+    preview = pcoll.get(key) or pcoll.new(key)
+    signature_ = np.asarray(measured, dtype=np.float64).tobytes() + np.asarray(
+        fitted, dtype=np.float64).tobytes()
+    if pcoll.polar.get(key) != signature_:
+        to_preview(preview, polar_image(measured, fitted, POLAR_SIZE))
+        pcoll.polar[key] = signature_
+    return preview
+
+
 def register():
     if _held["collection"] is not None:  # registered twice without unregister: start clean
         unregister()
@@ -169,6 +185,7 @@ def register():
     for name, image in zip(BASIS_NAMES, basis_sphere_images(BASIS_SIZE), strict=True):
         to_preview(pcoll.new(name), image)
     pcoll.signature, pcoll.stops, pcoll.swatches, pcoll.photo = None, 0.0, {}, None
+    pcoll.polar = {}
     _held["collection"] = pcoll
 
 

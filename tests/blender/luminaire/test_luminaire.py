@@ -304,6 +304,17 @@ def test_panel_shows_both_nines_and_the_temperature(addon):
     assert labels[at + 2] == " ".join(f"{v:.3g}" for v in own[0]) and own[0, 0] > 0
     assert labels[labels.index("L21") + 2] == " ".join(f"{v:.3g}" for v in own[7])
     assert abs(own[7, 0]) > 0.01 * own[0, 0]  # off to the side: a directional term
+    from sh_lighting.blender.ui import previews
+    from sh_lighting.core.polar_plot import polar_image
+
+    [(_, icon, scale)] = layout.of("icon")  # the polar diagram
+    preview = previews.collection()[f"polar_{info.root.name}"]
+    assert icon == preview.icon_id and scale >= 6
+    measured, fitted = build.polar_of(info.root)
+    assert np.abs(fitted - measured).max() > 0.01 * measured.max()  # one lamp: not exact
+    drawn = previews.from_preview(preview)
+    expected = polar_image(measured, fitted, previews.POLAR_SIZE)
+    assert np.abs(drawn - expected).max() <= 0.5 / 255 + 1e-6  # previews keep 8 bits
     if hasattr(info.root.data, "temperature"):
         assert ("temperature" in [c[2] for c in layout.of("prop")])
     else:
