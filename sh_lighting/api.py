@@ -94,6 +94,7 @@ __all__ = [
     "coefficients_from_photo", "photo_exposure", "SecondPhoto", "detect_photo_ball",
     # measured luminaires (IES, EULUMDAT)
     "PhotometryError", "LuminaireFit", "add_luminaire", "refit_luminaire", "remove_luminaire",
+    "set_luminaire_temperature", "luminaire_sh_at",
 ]
 
 TransferError = _transfer.TransferError
@@ -114,6 +115,18 @@ def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
 def refit_luminaire(scene, root, fit=LuminaireFit()):
     """Fit the EEVEE lamps of the luminaire ``root`` again with other ``fit`` settings."""
     return _luminaire.refit(scene, root, fit)
+
+
+def set_luminaire_temperature(root, kelvin):
+    """Colour the luminaire ``root`` as a blackbody at ``kelvin`` (800-20000 K), in Cycles
+    and EEVEE (Blender's Light Temperature where it has one, else its colour)."""
+    _luminaire.set_colour_temperature(root, kelvin)
+
+
+def luminaire_sh_at(scene, root, point):
+    """The (9, 3) L_lm the luminaire ``root`` adds at the world ``point`` (beside the scene's
+    nine: a source of irradiance I/r² from its direction)."""
+    return _luminaire.luminaire_sh_at(scene, root, point)
 
 
 def remove_luminaire(scene, root):

@@ -1,4 +1,4 @@
-"""Command line of SH Lighting: compute, apply, render, batch, bake-transfer and from-photo,
+"""Command line of SH Lighting: compute, apply, render, batch, bake-transfer, from-photo and luminaire,
 headless (``python -m sh_lighting``, ``blender -c sh_lighting``, ``blender -P cli/script.py``;
 what each command does and guarantees: docs/cli.md).
 
@@ -11,7 +11,7 @@ with ``HELP``, ``add_arguments(parser, prog)`` and ``run(args)``, which calls ``
 import argparse
 import sys
 
-from . import apply, batch, compute, interrupts, photo, render, transfer
+from . import apply, batch, compute, interrupts, luminaire, photo, render, transfer
 from .report import CommandError, error_line
 
 PROG = "python -m sh_lighting"
@@ -23,6 +23,7 @@ COMMANDS = {
     "batch": batch,
     "bake-transfer": transfer,
     "from-photo": photo,
+    "luminaire": luminaire,
 }
 
 __all__ = ["COMMANDS", "CommandError", "PROG", "build_parser", "main", "run_blender_command"]
