@@ -13,10 +13,13 @@ scale (1, 1: a round cone, ẑ = ω·a; otherwise an elliptical one, as Blender 
 The fit: candidates are spots on a set of axes (a sphere of directions plus the brightest
 samples) × half-angles × blends, and the point light; greedy selection (the candidate that
 alone lowers the residual most), then non-negative least squares (``nnls``) on the selected
-set over the sphere, weighted by solid angle; repeated until the relative RMSE of I over the
-sphere is at most ``error_target`` or ``max_lamps`` are in, then each lamp in turn is swapped
-for the best other candidate while that lowers the error, and coordinate descent refines each
-spot's axis, roll, scale, angle and blend. Directions are the light's local
+set, weighted by solid angle; repeated until the relative error is at most ``error_target``
+or ``max_lamps`` are in, then each lamp in turn is swapped for the best other candidate while
+that lowers the error. The greedy path depends on the candidates, so it runs on a coarse and
+a fine grid of half-angles and blends; coordinate descent refines each result's spots (axis,
+roll, scale, angle, blend) and the better one is kept. Two rounds then weight each surface of
+the room by its error (towards the worst surface's, a minimax, rather than the mean), and a
+last refinement runs on twice as fine a sampling. Directions are the light's local
 axes (nadir −Z), intensities in any unit (candela in, candela out).
 """
 
@@ -28,6 +31,11 @@ from .nnls import nnls
 
 HALF_ANGLES_DEG = (4.0, 8.0, 12.0, 16.0, 22.0, 30.0, 40.0, 52.0, 66.0, 80.0, 90.0)
 BLENDS = (0.15, 0.4, 0.7, 1.0)
+FINE_HALF_ANGLES_DEG = (3.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 19.0, 22.0, 26.0, 30.0,
+                        35.0, 40.0, 46.0, 52.0, 59.0, 66.0, 73.0, 80.0, 85.0, 90.0)
+FINE_BLENDS = (0.05, 0.15, 0.25, 0.4, 0.55, 0.7, 0.85, 1.0)
+CANDIDATE_GRIDS = ((HALF_ANGLES_DEG, BLENDS), (FINE_HALF_ANGLES_DEG, FINE_BLENDS))
+REWEIGHTS = 2  # rounds of weighting each surface by its error before the fine refinement
 
 
 @dataclass(frozen=True)
@@ -123,9 +131,41 @@ def fit_lamps(intensity, max_lamps=8, error_target=0.03, room=None, n_theta=48, 
         raise ValueError("the intensity must be finite and non-negative")
     if target.max() <= 0:
         return LampFit((), 0.0)
-    rows, row_weight, b = _objective(intensity, dirs, weights, room, 16)
-    params, columns = _candidates(rows, np.asarray(intensity(rows)), n_axes)
-    matrix = columns * row_weight[None, :].astype(np.float32)  # (candidates, rows)
+    rows, row_weight, b, blocks = _objective(intensity, dirs, weights, room, 16)
+    row_target = np.asarray(intensity(rows))
+    tried = []
+    for half_angles, blends in CANDIDATE_GRIDS:  # the greedy path depends on the grid
+        params, columns = _candidates(rows, row_target, n_axes, half_angles, blends)
+        chosen, x = _greedy(columns * row_weight[None, :].astype(np.float32), b, max_lamps,
+                            error_target)
+        lamps = tuple(_lamp(params[k], value) for k, value in zip(chosen, x))
+        lamps, error = refine(lamps, rows, row_weight, b, sweeps=8, with_error=True)
+        tried.append((error, len(lamps), lamps))
+    _, _, lamps = min(tried, key=lambda t: (t[0], t[1]))
+    scale = np.ones(len(blocks))
+    for _ in range(REWEIGHTS):  # towards the worst surface's error (minimax), not the mean
+        errors = _block_errors(lamps, rows, row_weight * _per_row(scale, blocks),
+                               b * _per_row(scale, blocks), blocks)
+        room_errors = errors[1:]  # the surfaces' (block 0 is the sphere's, kept as it is)
+        if room_errors.size == 0 or room_errors.max() <= 0:
+            break
+        scale[1:] *= np.clip(room_errors / np.sqrt(np.mean(room_errors ** 2)), 0.5, 2.0)
+        lamps = refine(lamps, rows, row_weight * _per_row(scale, blocks),
+                       b * _per_row(scale, blocks), sweeps=6)
+    # refined on twice as fine a sampling: a narrow spot cannot hide between samples
+    fine_dirs, fine_weights = sphere_samples(2 * n_theta, 2 * n_phi)
+    rows, row_weight, b, blocks = _objective(intensity, fine_dirs, fine_weights, room, 40)
+    lamps = refine(lamps, rows, row_weight * _per_row(scale, blocks),
+                   b * _per_row(scale, blocks), sweeps=6)
+    fine_dirs, fine_weights = sphere_samples(2 * n_theta, 2 * n_phi)
+    fine_error = relative_rmse(lamp_intensity(lamps, fine_dirs), intensity(fine_dirs),
+                               fine_weights)
+    return LampFit(lamps, fine_error)
+
+
+def _greedy(matrix, b, max_lamps, error_target):
+    """Greedy selection of columns of ``matrix`` (candidates × rows), NNLS powers, then swaps
+    of each chosen one for a better while that lowers the error (see the module's text)."""
     norms = np.einsum("ij,ij->i", matrix, matrix, dtype=np.float64)
 
     def solve(chosen):
@@ -151,7 +191,7 @@ def fit_lamps(intensity, max_lamps=8, error_target=0.03, room=None, n_theta=48, 
             break
         chosen, x, error = trial, trial_x, trial_error
     improved = True
-    while improved and len(chosen) > 1:  # swap each lamp for a better one while it helps
+    while improved and len(chosen) > 1:
         improved = False
         for i in range(len(chosen)):
             others = chosen[:i] + chosen[i + 1:]
@@ -163,18 +203,12 @@ def fit_lamps(intensity, max_lamps=8, error_target=0.03, room=None, n_theta=48, 
                 chosen, x, error = trial, trial_x, trial_error
                 improved = True
                 break
-    lamps = tuple(_lamp(params[k], value) for k, value in zip(chosen, x))
-    # refined on twice as fine a sampling: a narrow spot cannot hide between samples
-    fine_dirs, fine_weights = sphere_samples(2 * n_theta, 2 * n_phi)
-    lamps = refine(lamps, *_objective(intensity, fine_dirs, fine_weights, room, 40))
-    fine_dirs, fine_weights = sphere_samples(2 * n_theta, 2 * n_phi)
-    fine_error = relative_rmse(lamp_intensity(lamps, fine_dirs), intensity(fine_dirs),
-                               fine_weights)
-    return LampFit(lamps, fine_error)
+    return chosen, x
 
 
 def _objective(intensity, dirs, weights, room, room_samples):
-    """Sample directions, row weights and weighted targets of the fit's blocks (see fit)."""
+    """Sample directions, row weights, weighted targets of the fit's blocks (see fit) and
+    each block's row count."""
     blocks = [(dirs, np.sqrt(weights))]
     if room is not None:
         blocks += _room_blocks(room, room_samples)
@@ -189,7 +223,19 @@ def _objective(intensity, dirs, weights, room, room_samples):
         b.append(t / norm)
     scale = 1.0 / np.sqrt(len(rows))  # the RMS over blocks of each block's relative error
     return (np.concatenate(rows), np.concatenate(row_weight) * scale,
-            np.concatenate(b) * scale)
+            np.concatenate(b) * scale, [len(r) for r in rows])
+
+
+def _per_row(scale, blocks):
+    return np.repeat(scale, blocks)
+
+
+def _block_errors(lamps, dirs, row_weight, b, blocks):
+    """Each block's relative error ‖A x − b‖ / ‖b‖ of the lamps."""
+    residual = (row_weight * lamp_intensity(lamps, dirs) - b) ** 2
+    edges = np.cumsum([0] + list(blocks))
+    return np.array([np.sqrt(residual[i:j].sum() / max((b[i:j] ** 2).sum(), 1e-300))
+                     for i, j in zip(edges[:-1], edges[1:])])
 
 
 def _room_blocks(d, samples):
@@ -214,7 +260,7 @@ def _room_blocks(d, samples):
     return out
 
 
-def refine(lamps, dirs, row_weight, b, sweeps=12):
+def refine(lamps, dirs, row_weight, b, sweeps=12, with_error=False):
     """Coordinate descent on each spot's axis (two tilts), half-angle and blend, the powers
     by NNLS at every trial (variable projection), with steps halving when nothing improves."""
     norm = np.linalg.norm(b)
@@ -260,7 +306,7 @@ def refine(lamps, dirs, row_weight, b, sweeps=12):
             out.append(Lamp("SPOT", tuple(float(a) for a in axis), float(half), float(blend),
                             float(value), tuple(float(a) for a in x_axis),
                             (float(scale[0]), float(scale[1]))))
-    return tuple(out)
+    return (tuple(out), best) if with_error else tuple(out)
 
 
 def perpendicular(axis):
@@ -290,7 +336,7 @@ def _neighbours(spot, step):
             yield axis, half, blend, u, tuple(stretched)
 
 
-def _candidates(dirs, target, n_axes):
+def _candidates(dirs, target, n_axes, half_angles=HALF_ANGLES_DEG, blends=BLENDS):
     """Candidate parameters (axis, half-angle, blend; None for the point) and their masks."""
     peak = target.max()
     brightest = dirs[np.argsort(target)[-24:]]
@@ -301,9 +347,9 @@ def _candidates(dirs, target, n_axes):
     columns = [np.ones(len(dirs), dtype=np.float32)]
     for axis in axes[lit]:
         cosines = dirs @ axis
-        for degrees in HALF_ANGLES_DEG:
+        for degrees in half_angles:
             half = np.radians(degrees)
-            for blend in BLENDS:
+            for blend in blends:
                 width = (1.0 - np.cos(half)) * blend
                 columns.append(smoothstep((cosines - np.cos(half)) / width).astype(np.float32))
                 params.append((tuple(axis), half, blend))
@@ -333,3 +379,16 @@ def plane_illuminance_error(intensity, lamps, distance=1.0, half_size=2.0, sampl
     exact = np.asarray(intensity(dirs)) * factor
     fitted = lamp_intensity(lamps, dirs) * factor
     return relative_rmse(fitted.ravel(), exact.ravel(), np.ones(exact.size))
+
+
+def wall_illuminance_error(intensity, lamps, distance=1.0, samples=48):
+    """The largest relative RMSE of the illuminance over the four walls ``distance`` from the
+    light (|along| ≤ 2 d, −d ≤ z ≤ 3 d: the room of ``fit_lamps``); 0 for unlit walls."""
+    worst = 0.0
+    for dirs, factor in _room_blocks(distance, samples)[2:]:
+        exact = np.asarray(intensity(dirs)) * factor
+        if exact.max() <= 0:
+            continue
+        fitted = lamp_intensity(lamps, dirs) * factor
+        worst = max(worst, relative_rmse(fitted, exact, np.ones(exact.size)))
+    return worst

@@ -10,6 +10,7 @@ from sh_lighting.core.lamp_fit import (
     plane_illuminance_error,
     sphere_samples,
     spot_mask,
+    wall_illuminance_error,
 )
 
 
@@ -65,6 +66,19 @@ def test_plane_error_zero_for_itself_and_positive_otherwise():
     assert plane_illuminance_error(lambda d: lamp_intensity(lamps, d), lamps) == 0.0
     assert plane_illuminance_error(lambda d: 1.1 * lamp_intensity(lamps, d), lamps) == \
         pytest.approx(0.1 / 1.1)
+
+
+def test_wall_error_is_the_worst_wall():
+    """A spot tilted toward +X lights the +X wall most; a fit missing a side lamp toward −X
+    shows that wall's whole error, not the mean; a dark wall counts for nothing."""
+    tilted = (Lamp("SPOT", (0.6, 0.0, -0.8), np.radians(50.0), 0.5, 100.0),)
+    side = (Lamp("SPOT", (-0.8, 0.0, -0.6), np.radians(20.0), 0.3, 30.0),)
+    exact = tilted + side
+    assert wall_illuminance_error(lambda d: lamp_intensity(exact, d), exact, 2.0) == 0.0
+    missing = wall_illuminance_error(lambda d: lamp_intensity(exact, d), tilted, 2.0)
+    assert missing > 0.5  # the −X wall's light is mostly the side lamp's
+    down = (Lamp("SPOT", (0.0, 0.0, -1.0), np.radians(10.0), 0.1, 100.0),)
+    assert wall_illuminance_error(lambda d: lamp_intensity(down, d), down, 2.0) == 0.0
 
 
 def test_elliptical_spot_mask_stretches_the_cone():

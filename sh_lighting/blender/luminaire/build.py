@@ -38,7 +38,13 @@ import numpy as np
 from mathutils import Matrix, Vector
 
 from ...core.blackbody import blackbody_rgb
-from ...core.lamp_fit import fit_lamps, lamp_intensity, plane_illuminance_error, sphere_samples
+from ...core.lamp_fit import (
+    fit_lamps,
+    lamp_intensity,
+    plane_illuminance_error,
+    sphere_samples,
+    wall_illuminance_error,
+)
 from ...core.polar_plot import polar_curves
 from ...core.sh import sh_basis
 from ...formats.ies import parse_ies
@@ -73,7 +79,7 @@ class FitSettings:
 
     error_target: float = 0.03  # relative RMSE of I over the sphere that ends the search
     max_lamps: int = 8
-    check_distance: float = 2.0  # metres: the plane whose illuminance error is reported
+    check_distance: float = 2.0  # metres: the floor and walls whose illuminance errors are reported
 
 
 @dataclass(frozen=True)
@@ -81,13 +87,15 @@ class LuminaireInfo:
     root: object
     lamps: tuple
     intensity_error: float
-    plane_error: float
+    plane_error: float  # the floor's (a plane below at the check distance)
+    wall_error: float  # the worst wall's (at the check distance)
     flux_lm: float
 
     def report(self):
         return (f"Measured luminaire '{self.root.name}': {self.flux_lm:.0f} lm, "
                 f"{len(self.lamps)} EEVEE lamp(s), intensity error {100 * self.intensity_error:.1f} %, "
-                f"illuminance error {100 * self.plane_error:.1f} % on a plane below")
+                f"illuminance error {100 * self.plane_error:.1f} % on the floor, "
+                f"{100 * self.wall_error:.1f} % on the walls")
 
 
 def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
@@ -121,7 +129,7 @@ def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
     key = str(1 + max((int(k) for k in registry), default=0))
     registry[key] = {"root": root, "lamps": list(lamps), "text": ies_text}
     scene[REGISTRY] = registry
-    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, plane, table.flux_lm)
+    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, *plane, table.flux_lm)
 
 
 def refit(scene, root, settings=FitSettings()):
@@ -136,7 +144,7 @@ def refit(scene, root, settings=FitSettings()):
     lamps = _make_lamps(root, collection, fit.lamps, root.data.shadow_soft_size)
     _store_info(root, table, fit, plane, settings, root.data[INFO]["source"])
     entry["lamps"] = list(lamps)
-    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, plane, table.flux_lm)
+    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, *plane, table.flux_lm)
 
 
 def remove_luminaire(scene, root):
@@ -205,7 +213,8 @@ def _fit(table, settings):
         raise ValueError(f"lamps: {settings.max_lamps} (from 1 to 8)")
     fit = fit_lamps(table.intensity, settings.max_lamps, settings.error_target,
                     room=settings.check_distance)
-    plane = plane_illuminance_error(table.intensity, fit.lamps, settings.check_distance)
+    plane = (plane_illuminance_error(table.intensity, fit.lamps, settings.check_distance),
+             wall_illuminance_error(table.intensity, fit.lamps, settings.check_distance))
     return fit, plane
 
 
@@ -339,7 +348,8 @@ def _store_info(root, table, fit, plane, settings, source):
         "peak_cd": table.peak_cd,
         "lamps": len(fit.lamps),
         "intensity_error": fit.intensity_error,
-        "plane_error": plane,
+        "plane_error": plane[0],
+        "wall_error": plane[1],
         "check_distance": settings.check_distance,
         "error_target": settings.error_target,
         "max_lamps": settings.max_lamps,

@@ -24,7 +24,7 @@ class _FitSettingsMixin:
         description="Most EEVEE lamps (spot and point lights) the fit may use")
     check_distance: bpy.props.FloatProperty(
         name="Check Distance", default=2.0, min=0.01, soft_max=20.0, unit="LENGTH",
-        description="Distance of the plane below the luminaire whose illuminance error "
+        description="Distance of the floor and walls around the luminaire whose illuminance error "
         "(EEVEE lamps against the file) the panel shows")
 
     def fit_settings(self):
@@ -203,8 +203,9 @@ class SHLIGHT_PT_luminaire(bpy.types.Panel):
         box.label(text=f"EEVEE: {info.get('lamps', 0)} lamp(s), Cycles: the IES node (exact)")
         box.label(text=f"Intensity error {100 * info.get('intensity_error', 0):.1f} % "
                        "(relative RMS over the sphere)")
-        box.label(text=f"Illuminance error {100 * info.get('plane_error', 0):.1f} % on a plane "
-                       f"{info.get('check_distance', 0):.2f} m below")
+        distance = info.get("check_distance", 0)
+        box.label(text=f"Illuminance error {100 * info.get('plane_error', 0):.1f} % on a floor, "
+                       f"{100 * info.get('wall_error', 0):.1f} % on walls {distance:.2f} m away")
         curves = build.polar_of(context.object)
         if curves is not None:
             try:

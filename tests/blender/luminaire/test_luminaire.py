@@ -103,7 +103,8 @@ def _fitted_in_cycles(scene, info, tmp_path):
 # 1.2/4.4); BEGA (5.7/2.3) and the batwing (5.0/2.9) just miss it; the asymmetric ones miss
 # by far (ITALO 14.8/13.8, MAXWELL 10.8/8.1, road 13.8/17.4, projector 15.6/15.0, the
 # floodlight 8.0 on the floor, its wall barely lit and not fitted).
-MEETS_FIVE_PERCENT = ()
+MEETS_FIVE_PERCENT = ("bega_50988_lm63_1995.ies", "ugr_sample_08.ldt", "ugr_sample_09.ldt",
+                      "ugr_sample_11.ldt")
 
 
 @pytest.mark.slow
@@ -115,10 +116,12 @@ def test_fitted_lamps_against_the_exact_render(name, tmp_path):
     exact = illuminance_maps(scene, tmp_path, "exact")
     fitted = _fitted_in_cycles(scene, info, tmp_path)
     errors = {k: relative_rmse(fitted[k], exact[k]) for k in exact if exact[k].max() > 0}
-    shown = info.root.data[build.INFO]["plane_error"]
+    shown = {"floor": info.root.data[build.INFO]["plane_error"],
+             "wall": info.root.data[build.INFO]["wall_error"]}
     print(name, len(info.lamps), {k: round(100 * v, 1) for k, v in errors.items()},
-          "shown", round(100 * shown, 1))
-    assert shown / 1.5 <= errors["floor"] <= 1.5 * shown  # the panel tells the truth
+          "shown", {k: round(100 * v, 1) for k, v in shown.items()})
+    for which, error in errors.items():  # the panel tells the truth
+        assert shown[which] / 1.5 <= error <= 1.5 * shown[which], which
     if name in MEETS_FIVE_PERCENT:
         assert max(errors.values()) <= 0.05
 
