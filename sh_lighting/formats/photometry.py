@@ -70,6 +70,45 @@ class CandelaTable:
         return np.where(inside, row0 * (1 - pw) + row1 * pw, 0.0)
 
 
+    def intensity_cubic(self, directions):
+        """I (cd) toward ``directions`` as Cycles' IES node interpolates the same table:
+        Catmull-Rom in θ then in φ (``kernel_ies_interp``: θ mirrored at the first angle, the
+        last repeated; φ wrapped over 360°), negative results clamped to 0, 0 from the last θ."""
+        d = np.asarray(directions, dtype=np.float64)
+        theta = np.degrees(np.arccos(np.clip(-d[..., 2], -1.0, 1.0)))
+        phi = np.degrees(np.arctan2(-d[..., 0], -d[..., 1])) % 360.0
+        return self.at_cubic(theta, phi)
+
+    def at_cubic(self, theta_deg, phi_deg):
+        """I (cd) at (θ, φ) in degrees, interpolated as ``intensity_cubic``."""
+        t = np.asarray(theta_deg, dtype=np.float64)
+        p = np.asarray(phi_deg, dtype=np.float64) % 360.0
+        nt, nphi = len(self.theta_deg), len(self.phi_deg)
+        vi, vw = _cell(self.theta_deg, t)
+        hi, hw = _cell(self.phi_deg, p)
+        c = self.candela
+        rows = [np.where(vi == 0, 1, vi - 1), vi, vi + 1, np.minimum(vi + 2, nt - 1)]
+
+        def vertical(h):
+            return _catmull_rom(*(c[h, r] for r in rows), vw)
+
+        if nphi == 1:
+            value = vertical(np.zeros_like(hi))
+        else:  # φ's last plane is 360° = the first: wrap to the ones beside it
+            before = np.where(hi == 0, max(nphi - 2, 0), hi - 1)
+            after = np.where(hi + 2 >= nphi, np.minimum(1, nphi - 1), hi + 2)
+            value = _catmull_rom(vertical(before), vertical(hi), vertical(hi + 1),
+                                 vertical(after), hw)
+        inside = (t >= self.theta_deg[0]) & (t < self.theta_deg[-1])
+        return np.where(inside, np.maximum(value, 0.0), 0.0)
+
+
+def _catmull_rom(a, b, c, d, x):
+    """Cycles' ``cubic_interp``: the Catmull-Rom spline through b (x = 0) and c (x = 1)."""
+    return 0.5 * (((d + 3.0 * (b - c) - a) * x + (2.0 * a - 5.0 * b + 4.0 * c - d)) * x
+                  + (c - a)) * x + b
+
+
 def _cell(grid, x):
     """Index i and weight w of x in the increasing ``grid`` (x = grid[i]·(1−w) + grid[i+1]·w)."""
     i = np.clip(np.searchsorted(grid, x, side="right") - 1, 0, len(grid) - 2)

@@ -205,3 +205,23 @@ def test_hostile_ldt_one_line_naming_the_line(case):
 def test_unreadable_path(tmp_path):
     with pytest.raises(PhotometryError, match="cannot read"):
         read_photometry(tmp_path / "missing.ies")
+
+
+def test_cubic_reading_as_cycles():
+    """Catmull-Rom: the table's values at its angles, linear data kept linear, φ wrapped over
+    360°, 0 from the last θ, never negative (Cycles' kernel_ies_interp)."""
+    vertical = list(range(0, 91, 10))
+    rows = [[1000 - 10 * v for v in vertical], [500 - 5 * v for v in vertical],
+            [1000 - 10 * v for v in vertical]]
+    table = parse_ies(ies(vertical, [0, 90, 180], rows))
+    theta = np.array([0.0, 10.0, 40.0, 80.0])
+    assert table.at_cubic(theta, np.zeros(4)) == pytest.approx(table.at(theta, np.zeros(4)))
+    assert table.at_cubic(np.array([35.0]), np.array([0.0])) == pytest.approx([650.0])
+    left = table.at_cubic(np.array([30.0]), np.array([350.0]))  # between 270° and 360° = 0°
+    assert left == pytest.approx(table.at_cubic(np.array([30.0]), np.array([10.0])))
+    assert table.at_cubic(np.array([90.0, 120.0]), np.zeros(2)) == pytest.approx([0.0, 0.0])
+    spike = parse_ies(ies(vertical, [0], [[0, 0, 0, 100, 0, 0, 0, 0, 0, 0]]))
+    dips = spike.at_cubic(np.linspace(0.0, 89.0, 300), np.zeros(300))
+    assert dips.min() == 0.0 and dips.max() > 0  # the spline's undershoot clamped
+    assert spike.at(np.array([25.0]), np.array([0.0]))[0] != pytest.approx(
+        spike.at_cubic(np.array([25.0]), np.array([0.0]))[0])

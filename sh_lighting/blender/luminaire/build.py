@@ -211,10 +211,10 @@ def _entry(scene, obj):
 def _fit(table, settings):
     if not 1 <= settings.max_lamps <= 8:
         raise ValueError(f"lamps: {settings.max_lamps} (from 1 to 8)")
-    fit = fit_lamps(table.intensity, settings.max_lamps, settings.error_target,
+    fit = fit_lamps(table.intensity_cubic, settings.max_lamps, settings.error_target,
                     room=settings.check_distance)
-    plane = (plane_illuminance_error(table.intensity, fit.lamps, settings.check_distance),
-             wall_illuminance_error(table.intensity, fit.lamps, settings.check_distance))
+    plane = (plane_illuminance_error(table.intensity_cubic, fit.lamps, settings.check_distance),
+             wall_illuminance_error(table.intensity_cubic, fit.lamps, settings.check_distance))
     return fit, plane
 
 
@@ -329,7 +329,7 @@ def luminaire_sh_at(scene, root, point):
     if r < 1e-6:
         return np.zeros((9, 3))
     local = world.to_3x3().normalized().inverted() @ (to_point / r)
-    watts_per_sr = float(table.intensity(np.array([tuple(local)]))[0]) * root.data.energy
+    watts_per_sr = float(table.intensity_cubic(np.array([tuple(local)]))[0]) * root.data.energy
     e0 = watts_per_sr / LUMENS_PER_WATT / (r * r)
     toward = -np.array(to_point / r)
     return e0 * np.outer(sh_basis(toward[None, :], 2)[0], light_colour(root.data))
@@ -338,7 +338,7 @@ def luminaire_sh_at(scene, root, point):
 def luminaire_sh(table, n_theta=90, n_phi=180):
     """The nine L_lm = ∫ I(ω) Y_lm(ω) dω of the intensity in the light's own axes (cd·sr)."""
     dirs, weights = sphere_samples(n_theta, n_phi)
-    return (weights * table.intensity(dirs)) @ sh_basis(dirs, 2)
+    return (weights * table.intensity_cubic(dirs)) @ sh_basis(dirs, 2)
 
 
 def _store_info(root, table, fit, plane, settings, source):
@@ -355,7 +355,7 @@ def _store_info(root, table, fit, plane, settings, source):
         "max_lamps": settings.max_lamps,
         "sh": [float(v) for v in luminaire_sh(table)],
         # the polar diagram's curves (core.polar_plot), the file's and the fitted lamps'
-        "polar_file": [float(v) for v in polar_curves(table.intensity).ravel()],
+        "polar_file": [float(v) for v in polar_curves(table.intensity_cubic).ravel()],
         "polar_fit": [float(v) for v in polar_curves(
             lambda dirs: lamp_intensity(fit.lamps, dirs)).ravel()],
     }
