@@ -17,7 +17,7 @@ set, weighted by solid angle; repeated until the relative error is at most ``err
 or ``max_lamps`` are in, then each lamp in turn is swapped for the best other candidate while
 that lowers the error. The greedy path depends on the candidates, so it runs on a coarse and
 a fine grid of half-angles and blends; coordinate descent refines each result's spots (axis,
-roll, scale, angle, blend) and the better one is kept. Two rounds then weight each surface of
+roll, scale, angle, blend) and the better one is kept. Four rounds then weight each surface of
 the room by its error (towards the worst surface's, a minimax, rather than the mean), and a
 last refinement runs on twice as fine a sampling. Directions are the light's local
 axes (nadir −Z), intensities in any unit (candela in, candela out).
@@ -35,7 +35,7 @@ FINE_HALF_ANGLES_DEG = (3.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 19.0, 22.0, 
                         35.0, 40.0, 46.0, 52.0, 59.0, 66.0, 73.0, 80.0, 85.0, 90.0)
 FINE_BLENDS = (0.05, 0.15, 0.25, 0.4, 0.55, 0.7, 0.85, 1.0)
 CANDIDATE_GRIDS = ((HALF_ANGLES_DEG, BLENDS), (FINE_HALF_ANGLES_DEG, FINE_BLENDS))
-REWEIGHTS = 2  # rounds of weighting each surface by its error before the fine refinement
+REWEIGHTS = 4  # rounds of weighting each surface by its error before the fine refinement
 
 
 @dataclass(frozen=True)
