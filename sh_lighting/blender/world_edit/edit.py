@@ -9,11 +9,21 @@ group's Strength follows the Background's (linked to the same source, else its v
 k of the group (``nodes``) are the scene's Reset values if they were computed from this world
 (``scene_data.get_computed``, provenance "world"), else 0 and 0: the nine terms alone.
 
-Identity: the world and its group point at each other (ID pointer custom properties). A copy
-of the world keeps the pointer to the group, but the group points back at the original, so
-``remove`` never deletes what a copy holds; a copy of the group is pointed at by no world.
-The links replaced are recorded on the group (JSON); ``remove`` puts each back, deletes the
-group nodes and the group (when nothing else uses it). An error while inserting rolls back.
+Identity, without ID pointers (an ID pointer in a custom property is user-counted, and the
+copies of the group EEVEE frees after compiling the world shader in Blender 4.3 decrement the
+user count of what it points at: "id_us_min: ID user decrement error"). Edit World gives the
+world and its group one random token (plain strings: ``WORLD_TOKEN`` on the world, ``OWNER``
+{"token", "world": its name} on the group); the world's group is a group its own node tree uses
+with that token. A copy of the world inherits the token and shares the group through its
+copied node tree; the name tells them apart: the group is the world's the owner record names,
+or, the world renamed, the only world holding the token's. So ``remove`` of a copy is False and
+leaves the original's edit (and the group) alone, and Apply on a copy takes the inherited group
+node out of the copy's tree (``_take_out_inherited``) and makes the copy its own group. A copy
+of the group holds the token but no world's tree uses it with that token. Files saved before
+(the world and group pointing at each other) are read as they were and take the token form at
+the next Apply. The links replaced are recorded on the group (JSON); ``remove`` puts each back,
+deletes the group nodes and the group (when nothing else uses it). An error while inserting
+rolls back.
 
 ``Clamping`` (``core.world_edit``): where k L_world + Σ ΔL Y goes below zero the clamp adds
 light; Apply measures it on the world's map and keeps the numbers on the group (the panel
@@ -21,6 +31,7 @@ shows them).
 """
 
 import json
+import secrets
 
 import bpy
 import numpy as np
@@ -33,11 +44,12 @@ from ..design import lights as design_lights
 from ..world import reader
 from . import lights, nodes
 
-WORLD_POINTER = "sh_lighting_world_edit"  # on the world: its group
-GROUP_WORLD = "sh_lighting_world"  # on the group: the world it was made for
+WORLD_TOKEN = "sh_lighting_world_edit"  # on the world: the token it shares with its group
+OWNER = "sh_lighting_world_edit_owner"  # on the group: JSON {"token", "world": the world's name}
+LEGACY_GROUP_WORLD = "sh_lighting_world"  # before the token: on the group, an ID pointer to it
 RECORD = "sh_lighting_world_edit_record"  # on the group: JSON of the links replaced
 CLAMPING = "sh_lighting_world_edit_clamping"  # on the group: {"share", "difference", ...}
-LAMPS = "sh_lighting_world_edit_lamps"  # on the group: {"lamps": [the Sun lamps it shows]}
+LAMPS = "sh_lighting_world_edit_lamps"  # on the group: JSON {"lamps": [names of the lamps shown]}
 NODE_LABEL = "SH World Edit"
 ESTIMATE_WIDTH = 512  # the clamping is measured on the world's map box-averaged to this width
 CAPTURE_WIDTH = 256  # a procedural world is captured this wide for it
@@ -48,14 +60,51 @@ class WorldEditError(ValueError):
     """The world cannot be edited; the message says why and what to do. Nothing changed."""
 
 
-def group_of(world):
-    """The World Edit group the add-on made for ``world`` (mutual pointers), or None."""
-    if world is None:
-        return None
-    group = world.get(WORLD_POINTER)
+def _owner(group):
+    """The group's {"token", "world"} record, or None (not a World Edit group with one)."""
     if not isinstance(group, bpy.types.NodeTree) or WORLD_EDIT_MARKER not in group:
         return None
-    return group if group.get(GROUP_WORLD) == world else None
+    try:
+        record = json.loads(group[OWNER])
+    except (KeyError, ValueError, TypeError):
+        return None
+    if not isinstance(record, dict) or not isinstance(record.get("token"), str):
+        return None
+    return record
+
+
+def _groups_used(world):
+    """The World Edit groups ``world``'s node tree uses, each once, in node order."""
+    tree = world.node_tree if compat.uses_nodes(world) else None
+    found = {}
+    for node in tree.nodes if tree is not None else ():
+        if is_world_edit(node):
+            found.setdefault(node.node_tree.as_pointer(), node.node_tree)
+    return list(found.values())
+
+
+def group_of(world):
+    """The World Edit group the add-on made for ``world``, or None: a group its node tree uses
+    that holds the world's token and is its own (the group names it, or no other world holds
+    the token: a rename); a copy of the world is not (the original holds the token too)."""
+    if world is None:
+        return None
+    token = world.get(WORLD_TOKEN)
+    if isinstance(token, bpy.types.NodeTree):  # a file from before the token
+        legacy = token
+        if WORLD_EDIT_MARKER in legacy and legacy.get(LEGACY_GROUP_WORLD) == world:
+            return legacy
+        return None
+    if not isinstance(token, str) or not token:
+        return None
+    for group in _groups_used(world):
+        record = _owner(group)
+        if record is None or record["token"] != token:
+            continue
+        if record.get("world") == world.name or not any(
+                other != world and other.get(WORLD_TOKEN) == token for other in bpy.data.worlds):
+            return group
+    return None
 
 
 def is_edited(world):
@@ -168,18 +217,20 @@ def edit_world(scene, measure=True):
         raise WorldEditError(f"world '{world.name}': Background '{strength_zero[0]}' has "
                              "Strength 0, so no change can show: raise its Strength, or use "
                              "Keep BSDF")
+    _take_out_inherited(world)
     group = nodes.new_group(world)
     record = {"version": 1, "backgrounds": []}
+    token = secrets.token_hex(8)
     try:
         nodes.build(group, own, keep, sources, lights.luminance())
-        group[GROUP_WORLD] = world
+        group[OWNER] = json.dumps({"token": token, "world": world.name})
         for background in targets:
             record["backgrounds"].append(_insert(world.node_tree, background, group))
         group[RECORD] = json.dumps(record)
         if clamping is not None:
             group[CLAMPING] = {"share": clamping.share, "texels": clamping.texels,
                                "difference": clamping.difference}
-        world[WORLD_POINTER] = group
+        world[WORLD_TOKEN] = token
         if sources:
             _show_lamps(scene, group)
     except Exception:
@@ -215,21 +266,36 @@ def _insert(tree, background, group):
     return entry
 
 
+def _record_of(group):
+    try:
+        record = json.loads(group.get(RECORD, "{}"))
+    except (ValueError, TypeError):
+        record = {}
+    return record if isinstance(record, dict) else {}
+
+
 def remove(world):
     """Take the World Edit out of ``world``, restoring the links it replaced; True if there
     was one of the add-on's."""
     group = group_of(world)
     if group is None:
         return False
-    try:
-        record = json.loads(group.get(RECORD, "{}"))
-    except (ValueError, TypeError):
-        record = {}
-    _restore(world, group, record)
+    _restore(world, group, _record_of(group))
     return True
 
 
-def _restore(world, group, record):
+def _take_out_inherited(world):
+    """Before Apply makes ``world`` its own group: take out of its tree the World Edit groups
+    it holds but that are not its (a copy of an edited world shares the original's), their
+    links restored by their record (the node names are the copy's too); the original keeps its
+    group, its lamps and its token."""
+    for group in _groups_used(world):
+        _restore(world, group, _record_of(group), own=False)
+
+
+def _restore(world, group, record, own=True):
+    """Put back the links of ``record`` in ``world``'s tree and delete the nodes of ``group``
+    there; ``own``: the world's own edit (its lamps hidden again, its token deleted)."""
     tree = world.node_tree
     for entry in record.get("backgrounds", ()):
         background = tree.nodes.get(entry.get("node", ""))
@@ -248,12 +314,15 @@ def _restore(world, group, record):
             link = tree.links.new(socket, colour)
             if entry.get("muted") and hasattr(link, "is_muted"):
                 link.is_muted = True
-    _hide_lamps(group)
+    if own:
+        _hide_lamps(group)
     for node in [n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup"
                  and n.node_tree == group]:
         tree.nodes.remove(node)
-    if world.get(WORLD_POINTER) == group:
-        del world[WORLD_POINTER]
+    if own:
+        for holder, key in ((world, WORLD_TOKEN), (group, LEGACY_GROUP_WORLD)):
+            if key in holder:
+                del holder[key]
     if group.users == 0:
         bpy.data.node_groups.remove(group)
     world.update_tag()
@@ -262,22 +331,36 @@ def _restore(world, group, record):
 def _show_lamps(scene, group):
     """Extract Lights' lamps are hidden from glossy and transmission rays while the world
     shows their sources; the edited world does not, so the lamps are shown to them (their
-    reflections are the sources'), recorded on the group for ``_hide_lamps``."""
+    reflections are the sources'), recorded on the group by name for ``_hide_lamps`` (no ID
+    pointer on the group: see the module's note)."""
     shown = []
     for obj in design_lights.extracted_lights(scene):
         if not obj.visible_glossy or not obj.visible_transmission:
             obj.visible_glossy = obj.visible_transmission = True
-            shown.append(obj)
+            shown.append(obj.name)
     if shown:
-        group[LAMPS] = {"lamps": shown}
+        group[LAMPS] = json.dumps({"lamps": shown})
+
+
+def _lamps_shown(group):
+    """The lamps ``group`` recorded as shown: local light objects by the names it holds (or,
+    a file from before, the objects it pointed at)."""
+    value = group.get(LAMPS)
+    if hasattr(value, "to_dict"):  # a file from before: {"lamps": [Object]}
+        found = [obj for obj in value.get("lamps", ()) if isinstance(obj, bpy.types.Object)]
+    else:
+        try:
+            names = json.loads(value).get("lamps", ())
+        except (AttributeError, ValueError, TypeError):
+            names = ()
+        found = [bpy.data.objects.get(name) for name in names if isinstance(name, str)]
+    return [obj for obj in found
+            if obj is not None and obj.library is None and obj.type == "LIGHT"]
 
 
 def _hide_lamps(group):
-    value = group.get(LAMPS)
-    lamps = value.get("lamps", ()) if hasattr(value, "to_dict") else ()
-    for obj in lamps:
-        if isinstance(obj, bpy.types.Object) and obj.library is None:
-            obj.visible_glossy = obj.visible_transmission = False
+    for obj in _lamps_shown(group):
+        obj.visible_glossy = obj.visible_transmission = False
     if LAMPS in group:
         del group[LAMPS]
 
