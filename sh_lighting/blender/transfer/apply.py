@@ -28,7 +28,7 @@ class Result(NamedTuple):
 def baked_objects(objects):
     """The objects among ``objects`` holding a transfer bake (a record and the attributes)."""
     return [o for o in objects if o.type == "MESH" and bake.record(o) is not None
-            and all(o.data.color_attributes.get(n) for n in bake.ATTRIBUTE_NAMES)]
+            and bake.missing_parts(o, bake.record(o)) is None]
 
 
 def is_transfer_node(node):

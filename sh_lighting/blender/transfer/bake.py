@@ -4,8 +4,9 @@ Precomputed radiance transfer (Sloan, Kautz and Snyder 2002, eq. 1-3): a diffuse
 receives E(p) = Σ_lm T_lm(p) L_lm, T_lm(p) the irradiance at p under a world emitting Y_lm
 (Â_l Y_lm(n) where nothing occludes, eq. 13). Cycles' Diffuse bake (Direct + Indirect, no
 Color) is that irradiance / π, so T_lm = π · bake of the world Y_lm (``basis``). Stored per
-face corner in the colour attributes ``ATTRIBUTE_NAMES`` with a ``RECORD`` for ``stale``; the
-scene's world, engine, samples and selection are put back, its lights hidden and SH nodes
+face corner in the colour attributes ``ATTRIBUTE_NAMES``, or per texel (``texels``) for meshes
+too coarse to carry a shadow at their corners (``coverage``), with a ``RECORD`` for ``stale``;
+the scene's world, engine, samples and selection are put back, its lights hidden and SH nodes
 muted during the bake. Details: docs/modules.md.
 """
 
@@ -18,12 +19,13 @@ import numpy as np
 
 from ...core.sh import COEFFICIENT_NAMES
 from ..shading import materials
-from . import basis, coverage
+from . import basis, coverage, nodes, texels
 from .stale import (  # noqa: F401 (re-exported: the bake's names in one place)
-    ATTRIBUTE_NAMES, RECORD, RECORD_VERSION, SCRATCH_NAME, evaluated_depsgraph,
-    geometry_fingerprint, has_transfer, record, remove_transfer, scene_fingerprint, status,
-    view_layer_of,
+    ATTRIBUTE_NAMES, IMAGE_NAMES, RECORD, RECORD_VERSION, SCRATCH_NAME, UV_NAME,
+    drop_unused_atlas, evaluated_depsgraph, geometry_fingerprint, has_transfer, missing_parts,
+    record, scene_fingerprint, status, view_layer_of,
 )
+from . import stale
 
 #: Cycles samples per corner: measured on the test scene (plane and box, tests/blender/
 #: test_transfer.py): the relative RMSE of T against a 1024-sample bake falls as 1/√samples
@@ -35,6 +37,10 @@ MAX_SAMPLES = 1 << 16
 #: samples: 12.6 s; 3168 corners: 2.6 s); ``estimate_seconds`` prefers the file's last bake.
 SECONDS_PER_CORNER_SAMPLE = 1.2e-6
 SECONDS_PER_BASIS = 0.05
+#: Where T_lm is stored: "AUTO" per texel for meshes ``coverage`` finds too coarse, per corner
+#: for the others; "CORNERS" or "TEXELS" for every mesh.
+STORES = ("AUTO", "CORNERS", "TEXELS")
+SCRATCH_UV = "sh_transfer_uv_bake"  # the atlas UV map while a bake runs
 
 
 class TransferError(ValueError):
@@ -49,6 +55,8 @@ class BakeInfo(NamedTuple):
     seconds: float  # wall time of the whole bake
     basis_seconds: list  # per bake of a basis world, in index order
     notes: list  # what the user should know about the result (one line each)
+    texel_objects: list = []  # names of the objects baked per texel
+    texels: int = 0  # texels baked (inside the atlas's charts)
 
 
 def refusal(scene, obj, view_layer=None):
@@ -89,6 +97,16 @@ def refusal(scene, obj, view_layer=None):
     return None
 
 
+def remove_transfer(obj):
+    """``stale.remove_transfer`` (attributes, UV map, record; the atlas once unused), the
+    "SH Transfer" group rebuilt if the atlas went (its image nodes read no image)."""
+    had_atlas = stale.atlas_images() is not None
+    found = stale.remove_transfer(obj)
+    if had_atlas and stale.atlas_images() is None and nodes.find_node_group() is not None:
+        nodes.ensure_node_group()
+    return found
+
+
 def check_objects(scene, objects):
     """The objects as a list if every one can be baked, else a TransferError naming the first
     problem (one line: what is wrong and what to do)."""
@@ -115,10 +133,11 @@ class Plan(NamedTuple):
     vertices: int
     corners: int
     seconds: float  # estimated from ``SECONDS_PER_CORNER_SAMPLE`` or the file's last bake
-    coarse: list  # ``coverage.coarse_receivers`` of the objects to bake
+    coarse: list  # one line per object baked per texel, why and at what size
+    texels: int = 0  # texels to bake (inside the atlas's charts)
 
 
-def plan(scene, objects, samples):
+def plan(scene, objects, samples, store="AUTO"):
     """What a bake of ``objects`` at ``samples`` would do, before it runs (a ``Plan``)."""
     view_layer = view_layer_of(scene)
     bakeable, refused = [], []
@@ -128,10 +147,44 @@ def plan(scene, objects, samples):
             refused.append((obj.name, reason))
         else:
             bakeable.append(obj)
-    corners = sum(len(o.data.loops) for o in bakeable)
+    split = _split(scene, bakeable, store)
+    corners = sum(len(o.data.loops) for o in split.corner_objects)
     vertices = sum(len(o.data.vertices) for o in bakeable)
-    return Plan(bakeable, refused, vertices, corners, estimate_seconds(scene, corners, samples),
-                coverage.coarse_receivers(scene, bakeable))
+    texel_count = split.atlas.covered if split.atlas else 0
+    return Plan(bakeable, refused, vertices, corners,
+                estimate_seconds(scene, corners + texel_count, samples), split.lines, texel_count)
+
+
+class _Split(NamedTuple):
+    corner_objects: list
+    texel_objects: list
+    atlas: object  # a ``core.lightmap.Atlas`` of ``texel_objects``, or None
+    lines: list  # one per texel object: why, at what texel size
+
+
+def _split(scene, picked, store):
+    """Which of ``picked`` (bakeable meshes) to bake per corner and which per texel
+    (``STORES``), with the texels' atlas."""
+    if store not in STORES:
+        raise TransferError(f"store {store!r}: use one of {', '.join(STORES)}")
+    if store == "CORNERS" or not picked:
+        return _Split(list(picked), [], None, [])
+    found = {o.name: (size, line) for o, size, line in coverage.coarse(scene, picked)}
+    if store == "TEXELS":
+        chosen = list(picked)
+    else:
+        chosen = [o for o in picked if o.name in found]
+    if not chosen:
+        return _Split(list(picked), [], None, [])
+    sizes = [found[o.name][0] for o in chosen if o.name in found]
+    occluder = min(sizes) if sizes else min(max(o.dimensions) for o in chosen) / 8.0
+    atlas = texels.layout(chosen, occluder)
+    lines = []
+    for obj in chosen:
+        why = "too coarse for a shadow at its corners" if obj.name in found else "asked for"
+        lines.append(f"'{obj.name}' is baked per texel ({why}): {atlas.texel * 100:.2g} cm "
+                     f"texels, a {atlas.size} × {atlas.size} atlas")
+    return _Split([o for o in picked if o not in chosen], chosen, atlas, lines)
 
 
 def estimate_seconds(scene, corners, samples):
@@ -148,16 +201,17 @@ def estimate_seconds(scene, corners, samples):
     return len(ATTRIBUTE_NAMES) * (SECONDS_PER_BASIS + corners * samples * rate)
 
 
-def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None):
+def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None,
+                  store="AUTO"):
     """Bake T_lm for ``objects`` in ``scene`` (see the module docstring); a ``BakeInfo``.
 
     ``report(text)`` is called with a line per basis function (its time); the window
     manager's progress bar counts the nine bakes. ``error_target`` (a fraction): the samples
-    are chosen for that noise (``choose_samples``) instead of ``samples``. A TransferError
-    (nothing changed) if an object cannot be baked or ``samples`` is not a whole number in
-    1 … MAX_SAMPLES.
+    are chosen for that noise (``choose_samples``) instead of ``samples``. ``store``: per
+    corner or per texel (``STORES``). A TransferError (nothing changed) if an object cannot be
+    baked or ``samples`` is not a whole number in 1 … MAX_SAMPLES.
     """
-    job = Bake(scene, objects, samples, report, error_target)
+    job = Bake(scene, objects, samples, report, error_target, store)
     window_manager = bpy.context.window_manager
     if window_manager is not None:
         window_manager.progress_begin(0, job.steps)
@@ -181,12 +235,28 @@ class Bake:
 
     steps = len(ATTRIBUTE_NAMES)
 
-    def __init__(self, scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None):
+    def __init__(self, scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None,
+                 store="AUTO"):
         self.scene = scene
         self.picked = check_objects(scene, objects)
+        self.notes = []
+        if store != "CORNERS":  # one atlas per file: the others baked per texel join it
+            view_layer = view_layer_of(scene)
+            for obj in texels.texel_objects():
+                if obj in self.picked:
+                    continue
+                if refusal(scene, obj, view_layer) is None:
+                    self.picked.append(obj)
+                    self.notes.append(f"'{obj.name}' is baked again: the objects baked per "
+                                      "texel share one atlas")
+        self.split = _split(scene, self.picked, store)
+        if self.split.texel_objects:
+            theirs = texels.foreign_image()
+            if theirs:
+                raise TransferError(f"the file has an image named '{theirs}' that the add-on "
+                                    "did not make: rename it to bake per texel")
         self.report = report or (lambda text: None)
         self.started = time.perf_counter()
-        self.notes = []
         if error_target is not None:
             samples, probe_noise = choose_samples(scene, self.picked, error_target)
             chosen = (f"{samples} samples chosen for a noise of {100 * error_target:.2g} % "
@@ -210,11 +280,11 @@ class Bake:
         """Bake the next basis world (the scene prepared for it and restored after)."""
         index = self.done
         began = time.perf_counter()
-        saved = _Saved(self.scene, self.picked)
+        saved = _Saved(self.scene, self.picked, self.split)
         try:
             saved.prepare(self.samples)
             self.emission_materials |= saved.emission_materials
-            self.bakes.append(_bake_basis(self.scene, saved, self.picked, index))
+            self.bakes.append(_bake_basis(self.scene, saved, self.split, index))
         finally:
             saved.restore()
         self.basis_seconds.append(time.perf_counter() - began)
@@ -241,31 +311,45 @@ class Bake:
             notes.append("materials in Emission mode reflect no light into the bake: "
                          + ", ".join(sorted(self.emission_materials)))
         seconds = time.perf_counter() - self.started
-        corners = vertices = 0
-        for position, obj in enumerate(picked):
-            transfer = _transfer([bake[position] for bake in self.bakes])
-            bad = int(np.count_nonzero(~np.isfinite(transfer)))
-            if bad:
-                transfer = np.nan_to_num(transfer, nan=0.0, posinf=0.0, neginf=0.0)
-                notes.append(
-                    f"'{obj.name}': {bad} values were not finite (degenerate faces?), set to 0")
+        split, corners, vertices = self.split, 0, 0
+        for position, obj in enumerate(split.corner_objects):
+            transfer = _finite(_transfer([bake[0][position] for bake in self.bakes]), obj, notes)
             _store(obj, transfer)
             corners += len(obj.data.loops)
+            _drop_texels(obj)
+        if split.texel_objects:
+            atlas = split.atlas
+            transfer = _finite(_transfer([bake[1] for bake in self.bakes]),
+                               split.texel_objects[0], notes)
+            texels.store(texels.fill_hidden(transfer, self.bakes[0][1], atlas.size), atlas.size)
+            for obj, uv in zip(split.texel_objects, atlas.uv):
+                texels.set_uv(obj, uv)
+                for name in ATTRIBUTE_NAMES:
+                    attribute = obj.data.color_attributes.get(name)
+                    if attribute is not None:
+                        obj.data.color_attributes.remove(attribute)
+        for obj in picked:
             vertices += len(obj.data.vertices)
             obj.data.update()
         depsgraph = evaluated_depsgraph(scene)
         scene_print = scene_fingerprint(scene, depsgraph)
-        coarse = coverage.coarse_receivers(scene, picked, depsgraph)
-        notes.extend(coarse)
+        notes.extend(split.lines)
+        notes.extend(coverage.coarse_receivers(scene, split.corner_objects, depsgraph))
         for obj in picked:
+            per_texel = obj in split.texel_objects
             obj[RECORD] = json.dumps({
                 "version": RECORD_VERSION, "samples": self.samples, "seconds": round(seconds, 3),
-                "corners": corners, "baked": time.time(),
-                "geometry": geometry_fingerprint(obj, depsgraph), "scene": scene_print,
-                "coarse": [line for line in coarse if line.startswith(f"'{obj.name}' ")],
+                "corners": corners, "texels": split.atlas.covered if split.atlas else 0,
+                "baked": time.time(), "geometry": geometry_fingerprint(obj, depsgraph),
+                "scene": scene_print, "store": "TEXELS" if per_texel else "CORNERS",
+                "coarse": [line for line in notes if line.startswith(f"'{obj.name}' ")],
             })
+        drop_unused_atlas()
+        if split.texel_objects or nodes.find_node_group() is not None:
+            nodes.ensure_node_group()  # the group reads the atlas only where there is one
         return BakeInfo([o.name for o in picked], corners, vertices, self.samples, seconds,
-                        self.basis_seconds, notes)
+                        self.basis_seconds, notes, [o.name for o in split.texel_objects],
+                        split.atlas.covered if split.atlas else 0)
 
 
 def choose_samples(scene, objects, error_target, probe=16):
@@ -281,14 +365,15 @@ def choose_samples(scene, objects, error_target, probe=16):
     picked = check_objects(scene, objects)
     if not (isinstance(error_target, (int, float)) and 0.0 < error_target < 1.0):
         raise TransferError(f"error target {error_target!r}: use a fraction between 0 and 1")
-    saved = _Saved(scene, picked)
+    corners_only = _Split(picked, [], None, [])
+    saved = _Saved(scene, picked, corners_only)
     seed = scene.cycles.seed
     try:
         saved.prepare(probe)
         runs = []
         for offset in (0, 1):
             scene.cycles.seed = seed + offset
-            runs.append(np.concatenate(_bake_basis(scene, saved, picked, 0)))
+            runs.append(np.concatenate(_bake_basis(scene, saved, corners_only, 0)[0]))
     finally:
         scene.cycles.seed = seed
         saved.restore()
@@ -299,8 +384,24 @@ def choose_samples(scene, objects, error_target, probe=16):
     return max(1, min(MAX_SAMPLES, samples)), noise
 
 
+def _finite(transfer, obj, notes):
+    bad = int(np.count_nonzero(~np.isfinite(transfer)))
+    if bad:
+        notes.append(f"'{obj.name}': {bad} values were not finite (degenerate faces?), set to 0")
+        transfer = np.nan_to_num(transfer, nan=0.0, posinf=0.0, neginf=0.0)
+    return transfer
+
+
+def _drop_texels(obj):
+    """Take an earlier per-texel bake's UV map off ``obj`` (now baked per corner)."""
+    layer = obj.data.uv_layers.get(UV_NAME)
+    if layer is not None:
+        obj.data.uv_layers.remove(layer)
+
+
 def _transfer(bakes):
-    """(9, corners, 3) T_lm from the nine bakes (each (corners, 3), basis worlds 0-8)."""
+    """(9, n, 3) T_lm from the nine bakes (each (n, 3) per corner or texel, basis worlds
+    0-8)."""
     constant = bakes[0]
     rows = [np.pi * basis.CONSTANT_SCALE * constant]
     for index in range(1, len(bakes)):
@@ -308,31 +409,41 @@ def _transfer(bakes):
     return np.stack(rows)
 
 
-def _bake_basis(scene, saved, picked, index):
-    """Bake basis world ``index`` into every picked mesh's scratch attribute; their RGB."""
+def _bake_basis(scene, saved, split, index):
+    """Bake basis world ``index`` into the corner objects' scratch attribute and the texel
+    objects' scratch image; (their RGB per corner object, the atlas's RGB or None)."""
     world = basis.new_basis_world(index)
     try:
         scene.world = world
-        with bpy.context.temp_override(
-            scene=scene, view_layer=saved.view_layer, active_object=picked[0],
-            object=picked[0], selected_objects=picked, selected_editable_objects=picked,
-        ):
-            result = bpy.ops.object.bake(
-                type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, target="VERTEX_COLORS",
-                use_selected_to_active=False, use_clear=True, margin=0,
-            )
-        if "FINISHED" not in result:
-            raise TransferError(f"the Cycles bake of {COEFFICIENT_NAMES[index]} was cancelled")
+        if split.corner_objects:
+            _cycles_bake(scene, saved, split.corner_objects, index, target="VERTEX_COLORS")
+        if split.texel_objects:
+            _cycles_bake(scene, saved, split.texel_objects, index, target="IMAGE_TEXTURES",
+                         uv_layer=SCRATCH_UV, margin=texels.MARGIN, margin_type="EXTEND",
+                         use_clear=False)
     finally:
         scene.world = saved.world
         bpy.data.worlds.remove(world)
     rows = []
-    for obj in picked:
+    for obj in split.corner_objects:
         attribute = obj.data.color_attributes[SCRATCH_NAME]
         values = np.empty(len(attribute.data) * 4, dtype=np.float32)
         attribute.data.foreach_get("color", values)
         rows.append(values.reshape(-1, 4)[:, :3].astype(np.float64))
-    return rows
+    return rows, saved.target.pixels() if split.texel_objects else None
+
+
+def _cycles_bake(scene, saved, objects, index, **options):
+    with bpy.context.temp_override(
+        scene=scene, view_layer=saved.view_layer, active_object=objects[0],
+        object=objects[0], selected_objects=objects, selected_editable_objects=objects,
+    ):
+        result = bpy.ops.object.bake(
+            type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, use_selected_to_active=False,
+            **{"margin": 0, "use_clear": True, **options},
+        )
+    if "FINISHED" not in result:
+        raise TransferError(f"the Cycles bake of {COEFFICIENT_NAMES[index]} was cancelled")
 
 
 def _store(obj, transfer):
@@ -354,9 +465,11 @@ def _store(obj, transfer):
 class _Saved:
     """What the bake changes in the user's scene, and its restoration."""
 
-    def __init__(self, scene, picked):
+    def __init__(self, scene, picked, split):
         self.scene = scene
         self.picked = picked
+        self.split = split
+        self.target = None  # the texels' ``texels.BakeTarget`` while prepared
         self.view_layer = view_layer_of(scene)
         self.world = scene.world
         self.render = {"engine": scene.render.engine}
@@ -377,10 +490,14 @@ class _Saved:
         cycles.use_adaptive_sampling = False
         cycles.sample_clamp_direct = 0.0
         cycles.sample_clamp_indirect = 0.0
-        for obj in self.picked:
+        for obj in self.split.corner_objects:
             colours = obj.data.color_attributes
             scratch = colours.get(SCRATCH_NAME) or colours.new(SCRATCH_NAME, "FLOAT_COLOR", "CORNER")
             colours.active_color = scratch
+        if self.split.texel_objects:
+            for obj, uv in zip(self.split.texel_objects, self.split.atlas.uv):
+                texels.set_uv(obj, uv, SCRATCH_UV)
+            self.target = texels.BakeTarget(self.split.texel_objects, self.split.atlas.size)
         for obj in self.scene.objects:
             if obj.type == "LIGHT" and not obj.hide_render:
                 obj.hide_render = True
@@ -408,6 +525,13 @@ class _Saved:
             node = material.node_tree.nodes.get(node_name) if material else None
             if node is not None:
                 node.mute = False
+        if self.target is not None:
+            self.target.restore()
+            self.target = None
+        for obj in self.split.texel_objects:
+            layer = obj.data.uv_layers.get(SCRATCH_UV)
+            if layer is not None:
+                obj.data.uv_layers.remove(layer)
         for obj in self.picked:
             colours = obj.data.color_attributes
             scratch = colours.get(SCRATCH_NAME)

@@ -66,6 +66,12 @@ def _touching(triangles, low, high):
 def coarse_receivers(scene, receivers, depsgraph=None):
     """One line per mesh of ``receivers`` too coarse for the shadow an occluder casts on it
     (the occluder with the fewest of its vertices in reach named), with what to do."""
+    return [line for _, _, line in coarse(scene, receivers, depsgraph)]
+
+
+def coarse(scene, receivers, depsgraph=None):
+    """(receiver, occluder size, line) for each mesh of ``receivers`` too coarse for the
+    shadow an occluder casts on it (``coarse_receivers``)."""
     if depsgraph is None:
         depsgraph = bpy.context.evaluated_depsgraph_get() if bpy.context.scene == scene else None
     occluders = [o for o in rendered_objects(view_layer_of(scene))
@@ -103,11 +109,10 @@ def coarse_receivers(scene, receivers, depsgraph=None):
                 worst = (count, size, occluder.name, reach)
         if worst is not None:
             count, size, name, reach = worst
-            lines.append(
+            lines.append((receiver, size,
                 f"'{receiver.name}' is too coarse for the shadow '{name}' casts on it: {count} "
                 f"of its vertices lie within {reach:.2g} m of it (the transfer is stored per "
                 "corner, so the shadow falls between them): subdivide it to edges of about "
                 f"{size / EDGES_ACROSS:.2g} m where the shadow falls (Edit Mode > Subdivide) "
-                "and bake again"
-            )
+                "and bake again"))
     return lines

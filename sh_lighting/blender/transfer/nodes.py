@@ -2,8 +2,9 @@
 
 Precomputed radiance transfer for diffuse surfaces (Sloan, Kautz and Snyder 2002, eq. 3): L_lm
 = s_lm · c_lm from the "SH Irradiance" group's View Layer readers (live sliders, keyframes),
-T_lm(p) per face corner from the colour attributes ``bake.ATTRIBUTE_NAMES``; per channel
-E = Σ T_lm ⊙ L_lm. Same interface as "SH Irradiance" (Normal unused: T_lm holds the
+T_lm(p) per face corner from the colour attributes ``bake.ATTRIBUTE_NAMES`` plus, where the
+file has a per-texel atlas (``texels``), its nine images read at the UV map ``UV_NAME`` (a
+mesh without either reads 0 from it); per channel E = Σ T_lm ⊙ L_lm. Same interface as "SH Irradiance" (Normal unused: T_lm holds the
 orientation); outputs Irradiance, Diffuse = Albedo · E / π, Shader (an Emission of Diffuse
 that diffuse rays do not see: the bounce is in T_lm already). Unbaked objects read 0.
 """
@@ -12,11 +13,11 @@ import bpy
 
 from ...core.sh import COEFFICIENT_NAMES
 from ..shading.nodes import Builder, diffuse_outputs, ensure_interface, lighting_readers
-from .bake import ATTRIBUTE_NAMES
+from .stale import ATTRIBUTE_NAMES, UV_NAME, atlas_images
 
 GROUP_NAME = "SH Transfer"
 GROUP_MARKER = "sh_lighting_transfer_group"
-GROUP_VERSION = 1
+GROUP_VERSION = 2
 DESCRIPTION = (
     "Diffuse lighting with shadows and interreflection: E = sum of T_lm (baked per corner in "
     "the mesh attributes sh_T00 ... sh_T22) times L_lm (scene properties sh_L00 ... sh_L22 "
@@ -51,6 +52,10 @@ def _build_nodes(tree):
     tree.nodes.clear()
     b = Builder(tree)
     group_in = b.node("NodeGroupInput", 0, 9)
+    images = atlas_images()  # no image nodes where no mesh is baked per texel
+    if images is not None:
+        uv = b.node("ShaderNodeAttribute", 0, 10, "Transfer UV",
+                    attribute_type="GEOMETRY", attribute_name=UV_NAME)
     total = None
     for index in reversed(range(9)):
         name = COEFFICIENT_NAMES[index]
@@ -60,7 +65,16 @@ def _build_nodes(tree):
             attribute_type="GEOMETRY", attribute_name=ATTRIBUTE_NAMES[index],
         )
         scaled = b.vector_math("SCALE", 4, index + 0.5, f"s {name} · T")
-        b.link(transfer.outputs["Color"], scaled.inputs[0])
+        if images is None:
+            b.link(transfer.outputs["Color"], scaled.inputs[0])
+        else:
+            texel = b.node("ShaderNodeTexImage", 1, index + 0.5, f"T {name} per texel",
+                           image=images[index], interpolation="Linear", extension="EXTEND")
+            b.link(uv.outputs["Vector"], texel.inputs["Vector"])
+            both = b.vector_math("ADD", 3, index + 0.5, f"T {name} corner + texel")
+            b.link(transfer.outputs["Color"], both.inputs[0])
+            b.link(texel.outputs["Color"], both.inputs[1])
+            b.link(both.outputs["Vector"], scaled.inputs[0])
         b.link(gain, scaled.inputs["Scale"])
         if total is None:
             term = b.vector_math("MULTIPLY", 5, index, f"T {name} L {name}")

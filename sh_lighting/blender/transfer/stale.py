@@ -22,6 +22,10 @@ from ..data.scene_data import PROPERTY_NAMES
 
 ATTRIBUTE_NAMES = tuple(name.replace("sh_L", "sh_T", 1) for name in PROPERTY_NAMES)
 RECORD = "sh_transfer"
+# A per-texel bake (``texels``): the atlas UV map on the mesh, nine images in the file.
+UV_NAME = "sh_transfer_uv"
+IMAGE_NAMES = tuple(f"SH Transfer {name[3:]}" for name in ATTRIBUTE_NAMES)  # SH Transfer T00
+IMAGE_MARKER = "sh_lighting_transfer_image"
 SCRATCH_NAME = "sh_transfer_bake"  # the attribute Cycles bakes into, removed after each bake
 RECORD_VERSION = 2
 RENDERED_TYPES = {"MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES", "POINTCLOUD", "VOLUME"}
@@ -171,9 +175,9 @@ def status(scene, obj, scene_print=None, depsgraph=None):
     info = record(obj)
     if info is None or obj.type != "MESH":
         return "NONE", f"'{obj.name}' has no transfer bake"
-    missing = [n for n in ATTRIBUTE_NAMES if obj.data.color_attributes.get(n) is None]
+    missing = missing_parts(obj, info)
     if missing:
-        return "STALE", f"'{obj.name}': the transfer attributes were removed: bake again"
+        return "STALE", f"'{obj.name}': {missing}: bake again"
     if info.get("version") != RECORD_VERSION:
         return "STALE", f"'{obj.name}' was baked by an older version of the add-on: bake again"
     depsgraph = depsgraph or evaluated_depsgraph(scene)
@@ -188,17 +192,41 @@ def status(scene, obj, scene_print=None, depsgraph=None):
                   f"{info.get('seconds')} s")
 
 
+def atlas_images():
+    """The atlas's nine images in index order (the add-on's: local, marked), or None if one
+    is missing."""
+    found = [bpy.data.images.get(name) for name in IMAGE_NAMES]
+    if any(i is None or i.library is not None or i.get(IMAGE_MARKER) != index
+           for index, i in enumerate(found)):
+        return None
+    return found
+
+
+def missing_parts(obj, info):
+    """What of ``obj``'s bake (record ``info``) is gone: a phrase, or None."""
+    if info.get("store") == "TEXELS":
+        if obj.data.uv_layers.get(UV_NAME) is None:
+            return "the transfer's UV map was removed"
+        if atlas_images() is None:
+            return "the transfer's images were removed"
+        return None
+    if any(obj.data.color_attributes.get(n) is None for n in ATTRIBUTE_NAMES):
+        return "the transfer attributes were removed"
+    return None
+
+
 def has_transfer(obj):
     """True if ``obj`` holds anything of a bake: its record or one of the attributes."""
     if obj.get(RECORD) is not None:
         return True
-    return obj.type == "MESH" and any(
-        obj.data.color_attributes.get(n) is not None for n in ATTRIBUTE_NAMES + (SCRATCH_NAME,))
+    return obj.type == "MESH" and (obj.data.uv_layers.get(UV_NAME) is not None or any(
+        obj.data.color_attributes.get(n) is not None for n in ATTRIBUTE_NAMES + (SCRATCH_NAME,)))
 
 
 def remove_transfer(obj):
-    """Delete the bake's attributes (the scratch one of an interrupted bake too) and record
-    from ``obj``; True if there was any."""
+    """Delete the bake's attributes (the scratch one of an interrupted bake too), atlas UV map
+    and record from ``obj``, and the atlas images once no object of the file is baked per
+    texel; True if there was any."""
     found = obj.get(RECORD) is not None
     if RECORD in obj:
         del obj[RECORD]
@@ -208,6 +236,22 @@ def remove_transfer(obj):
             if attribute is not None:
                 obj.data.color_attributes.remove(attribute)
                 found = True
+        layer = obj.data.uv_layers.get(UV_NAME)
+        if layer is not None:
+            obj.data.uv_layers.remove(layer)
+            found = True
         if found:
             obj.data.update()
+    drop_unused_atlas()
     return found
+
+
+def drop_unused_atlas():
+    """Delete the atlas images (the add-on's: by name and marker) once no object of the file
+    is baked per texel."""
+    if any((record(o) or {}).get("store") == "TEXELS" for o in bpy.data.objects):
+        return
+    for index, name in enumerate(IMAGE_NAMES):
+        image = bpy.data.images.get(name)
+        if image is not None and image.library is None and image.get(IMAGE_MARKER) == index:
+            bpy.data.images.remove(image)

@@ -28,9 +28,16 @@ def test_a_plain_floor_under_a_cube_is_warned_about_with_what_to_do():
     assert text.startswith("'Floor' is too coarse for the shadow 'Cube' casts on it: 0 of its "
                            "vertices lie within "), text
     assert "subdivide it to edges of about 0.25 m" in text and "\n" not in text
-    info = bake.bake_transfer(scene, [floor, cube], samples=1)
+    info = bake.bake_transfer(scene, [floor, cube], samples=1, store="CORNERS")
     assert warnings[0] in info.notes
     assert bake.record(floor)["coarse"] == warnings
+    # By default such a floor is baked per texel instead, and the bake says so
+    info = bake.bake_transfer(scene, [floor, cube], samples=1)
+    assert info.texel_objects == ["Floor"] and not any("too coarse for the" in n
+                                                       for n in info.notes)
+    assert bake.record(floor)["coarse"] == [
+        "'Floor' is baked per texel (too coarse for a shadow at its corners): 6.2 cm texels, "
+        "a 256 × 256 atlas"]
 
 
 def test_a_floor_gridded_finely_enough_is_not_warned_about():

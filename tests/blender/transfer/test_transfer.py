@@ -26,7 +26,8 @@ REPO = Path(__file__).resolve().parents[3]
 
 
 def _bake(objects, samples=16):
-    return bake.bake_transfer(bpy.context.scene, objects, samples=samples)
+    """Per corner: these tests read the corners' attributes (per texel: test_texels.py)."""
+    return bake.bake_transfer(bpy.context.scene, objects, samples=samples, store="CORNERS")
 
 
 def _scene(ground_cuts=8, box_cuts=1):
@@ -160,7 +161,8 @@ def test_a_mesh_without_faces_and_a_non_mesh_are_refused():
         bake.bake_transfer(scene, [ground], samples=0)
 
 
-def test_zero_area_and_non_manifold_faces_bake_to_finite_values():
+@pytest.mark.parametrize("store", ["CORNERS", "TEXELS"])
+def test_zero_area_and_non_manifold_faces_bake_to_finite_values(store):
     scene, ground, box = _scene(2, 0)
 
     def broken(bm):
@@ -173,12 +175,17 @@ def test_zero_area_and_non_manifold_faces_bake_to_finite_values():
         bm.faces.new((b, a, bm.verts.new((1, 1, 0))))
 
     odd = ts.mesh_object("Odd", broken)
-    info = _bake([odd, ground])
-    values = np.array([[d.color[:3] for d in odd.data.color_attributes[n].data]
-                       for n in bake.ATTRIBUTE_NAMES])
+    info = bake.bake_transfer(scene, [odd, ground], samples=16, store=store)
+    if store == "CORNERS":
+        values = np.array([[d.color[:3] for d in odd.data.color_attributes[n].data]
+                           for n in bake.ATTRIBUTE_NAMES])
+        assert info.corners == len(odd.data.loops) + len(ground.data.loops)
+    else:
+        values = np.array([np.array(bpy.data.images[n].pixels[:]) for n in bake.IMAGE_NAMES])
+        assert info.texel_objects == ["Odd", "Ground"] and info.corners == 0
+        assert bake.status(scene, odd)[0] == "OK"
     assert np.isfinite(values).all()
     assert values[0].max() > 0.1  # the constant world lights it
-    assert info.corners == len(odd.data.loops) + len(ground.data.loops)
 
 
 def test_bake_restores_the_scene_settings():
@@ -281,13 +288,14 @@ def test_error_target_chooses_the_samples_for_that_noise():
     1.85 / 0.90 / 0.43 %."""
     scene, ground, box = _scene(8, 2)
     lines = []
-    info = bake.bake_transfer(scene, [ground, box], report=lines.append, error_target=0.02)
+    info = bake.bake_transfer(scene, [ground, box], report=lines.append, error_target=0.02,
+                              store="CORNERS")
     assert lines[0].startswith(f"{info.samples} samples chosen for a noise of 2 %")
     assert 10 <= info.samples <= 60, info.samples
     runs = []
     for seed in (0, 1):
         scene.cycles.seed = seed
-        bake.bake_transfer(scene, [ground, box], samples=info.samples)
+        bake.bake_transfer(scene, [ground, box], samples=info.samples, store="CORNERS")
         runs.append(np.concatenate([[d.color[0] for d in o.data.color_attributes["sh_T00"].data]
                                     for o in (ground, box)]))
     mean = 0.5 * (runs[0] + runs[1])

@@ -36,7 +36,8 @@ def test_bake_then_the_panel_says_when_an_edit_made_it_stale(addon):
     assert bpy.ops.shlight.bake_transfer(samples=8) == {"FINISHED"}
     lines = transfer_ui.transfer_lines(scene, ground)
     assert lines[0][0] == "CHECKMARK" and lines[0][1].startswith("'Ground': baked, 8 samples")
-    assert "is too coarse for the shadow 'Box' casts on it" in lines[1][1]  # 1 m quads
+    assert lines[1][1].startswith("'Ground' is baked per texel (too coarse for a shadow at "
+                                  "its corners): ")  # 1 m quads
     assert lines[-1] == ("INFO", "2 baked, 0 stale")
     box.data.vertices[0].co.z += 0.2
     lines = transfer_ui.transfer_lines(scene, ground)
@@ -167,16 +168,20 @@ def test_plain_apply_keeps_the_transfer_and_apply_transfer_follows_the_panels_mo
 
 
 def _addon_attributes():
-    return sorted(f"{mesh.name}.{attribute.name}" for mesh in bpy.data.meshes
-                  for attribute in mesh.attributes
-                  if attribute.name.startswith(("sh_T", bake.SCRATCH_NAME)))
+    """Every trace of a bake: the corners' attributes, the atlas's UV maps and images."""
+    return sorted([f"{mesh.name}.{attribute.name}" for mesh in bpy.data.meshes
+                   for attribute in mesh.attributes
+                   if attribute.name.startswith(("sh_T", "sh_transfer"))]
+                  + [image.name for image in bpy.data.images if "Transfer" in image.name])
 
 
 def test_remove_and_delete_transfer_leave_no_attribute_of_the_add_on(addon):
     scene, ground, box = _scene(2, 0)
     _select([ground, box])
     assert bpy.ops.shlight.bake_transfer(samples=1) == {"FINISHED"}
-    assert len(_addon_attributes()) == 18
+    assert len(_addon_attributes()) == 19  # the box's 9 attributes, the ground's UV map and
+    # the atlas's 9 images (the 1 m ground quads are too coarse: baked per texel)
+    assert "Ground.sh_transfer_uv" in _addon_attributes()
     assert bpy.ops.shlight.apply_transfer() == {"FINISHED"}
     _select([ground])
     assert bpy.ops.shlight.remove() == {"FINISHED"}  # Keep BSDF: the whole scene's
