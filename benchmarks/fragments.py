@@ -27,6 +27,8 @@ ORDER = (
     "transfer",
     "transfer_equal_error",
     "transfer_reading",
+    "texel",
+    "texel_reading",
     "photo",
     "sizes",
     "sizes_reading",

@@ -135,16 +135,18 @@ def remove_luminaire(scene, root):
 
 
 def bake_transfer(scene, objects, samples=_transfer.DEFAULT_SAMPLES, report=print,
-                  error_target=None):
+                  error_target=None, store="AUTO"):
     """Bake the transfer T_lm (Sloan, Kautz and Snyder 2002) of the meshes ``objects`` in
     ``scene`` with Cycles: per face corner, the irradiance each SH basis function gives
     through the scene's shadows and interreflection, stored in the meshes' colour attributes
     sh_T00 ... sh_T22. ``report(text)`` gets a line per basis function with its time.
     ``error_target`` (a fraction, e.g. 0.01): choose the samples for that noise instead.
+    ``store``: "AUTO" bakes meshes too coarse for a shadow at their corners per texel (a
+    lightmap atlas on a UV map the add-on adds), "CORNERS" or "TEXELS" every mesh so.
     Returns a ``BakeInfo`` (objects, corners, vertices, samples, seconds, basis_seconds,
-    notes); a ``TransferError`` (nothing changed) for objects that cannot be baked
-    (modifiers, linked duplicates, no faces, not meshes, hidden)."""
-    return _transfer.bake_transfer(scene, objects, samples, report, error_target)
+    notes, texel_objects, texels); a ``TransferError`` (nothing changed) for objects that
+    cannot be baked (modifiers, linked duplicates, no faces, not meshes, hidden)."""
+    return _transfer.bake_transfer(scene, objects, samples, report, error_target, store)
 
 
 def transfer_refusal(scene, obj):

@@ -32,6 +32,10 @@ def add_arguments(p, prog):
     p.add_argument("--error-target", type=float, metavar="PERCENT",
                    help="choose the samples for this noise of the ambient transfer instead "
                    "(relative RMS over the corners, e.g. 1 for 1 %%; two probe bakes first)")
+    p.add_argument("--store", choices=("auto", "corners", "texels"), default="auto",
+                   help="where the transfer is stored: auto (default) per texel for meshes too "
+                   "coarse to carry a shadow at their corners, such as a plain floor, per "
+                   "corner for the others; corners or texels for every mesh")
     p.add_argument("--apply", action="store_true",
                    help="also light the baked objects' materials by the transfer")
     add_scene(p, "scene to bake")
@@ -63,12 +67,13 @@ def run(args):
         target = None if args.error_target is None else args.error_target / 100.0
         with interrupts.at_once():  # Cycles' bake would swallow a KeyboardInterrupt
             info = api.bake_transfer(scene, objects, samples=args.samples, report=say,
-                                     error_target=target)
+                                     error_target=target, store=args.store.upper())
     except api.TransferError as error:
         raise CommandError(f"{error}; nothing saved") from None
     per_10k = info.seconds / max(info.vertices, 1) * 1e4
     say(f"Baked the transfer of {len(info.objects)} object(s) ({', '.join(info.objects)}): "
-        f"{info.vertices} vertices, {info.samples} samples, {info.seconds:.1f} s "
+        f"{info.vertices} vertices, {info.texels} texels, {info.samples} samples, "
+        f"{info.seconds:.1f} s "
         f"({per_10k:.1f} s per 10k vertices)")
     for note in info.notes:
         say(f"note: {note}")

@@ -122,3 +122,22 @@ def test_an_interrupted_bake_stops_at_once_one_line_and_the_file_untouched(tmp_p
     assert "Transfer L1-1" not in stdout and "Saved" not in stdout
     assert blend.read_bytes() == before and not out.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.blend"]
+
+
+def test_bake_transfer_per_texel_saves_the_atlas_in_the_file(tmp_path):
+    blend = _blend(tmp_path / "scene.blend")
+    out = tmp_path / "baked.blend"
+    result = run("bake-transfer", blend, "--samples", "1", "--store", "texels", "--out", out,
+                 timeout=300)
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert any(line.startswith("note: 'Box' is baked per texel (asked for): ")
+               for line in lines), lines
+    assert not any("Baking map saved" in line for line in lines), lines  # Cycles' chatter
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    scene = bpy.context.scene
+    for name in ("Ground", "Box"):
+        obj = bpy.data.objects[name]
+        assert bake.record(obj)["store"] == "TEXELS"
+        assert bake.status(scene, obj)[0] == "OK"
+    assert all(bpy.data.images[name].packed_file is not None for name in bake.IMAGE_NAMES)

@@ -10,7 +10,10 @@ the scene's world, engine, samples and selection are put back, its lights hidden
 muted during the bake. Details: docs/modules.md.
 """
 
+import contextlib
 import json
+import os
+import sys
 import time
 from typing import NamedTuple
 
@@ -392,6 +395,26 @@ def _finite(transfer, obj, notes):
     return transfer
 
 
+@contextlib.contextmanager
+def _quiet_stdout():
+    """In background mode, Blender prints the image bake's "Baking map saved to internal
+    image, save it externally or pack it" (the add-on packs it) to standard output once per
+    basis; sent to the null device for the bake call. Errors still raise."""
+    if not bpy.app.background:
+        yield
+        return
+    sys.stdout.flush()
+    saved = os.dup(1)
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(null)
+
+
 def _drop_texels(obj):
     """Take an earlier per-texel bake's UV map off ``obj`` (now baked per corner)."""
     layer = obj.data.uv_layers.get(UV_NAME)
@@ -434,7 +457,7 @@ def _bake_basis(scene, saved, split, index):
 
 
 def _cycles_bake(scene, saved, objects, index, **options):
-    with bpy.context.temp_override(
+    with _quiet_stdout(), bpy.context.temp_override(
         scene=scene, view_layer=saved.view_layer, active_object=objects[0],
         object=objects[0], selected_objects=objects, selected_editable_objects=objects,
     ):

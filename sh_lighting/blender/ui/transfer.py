@@ -63,6 +63,14 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
     error_target: bpy.props.FloatProperty(
         name="Target", default=1.0, min=0.05, max=50.0, subtype="PERCENTAGE",
         description="Noise of the ambient transfer, relative RMS over the corners, %")
+    store: bpy.props.EnumProperty(
+        name="Store", default="AUTO",
+        items=[("AUTO", "Automatic", "Per texel for meshes too coarse to carry a shadow at "
+                "their corners (a plain floor), per corner for the others"),
+               ("CORNERS", "Per Corner", "In the meshes' colour attributes: dense meshes"),
+               ("TEXELS", "Per Texel", "In a lightmap atlas on a UV map the add-on adds (your "
+                "UV maps untouched): any mesh, at a texel size from the scene's scale")],
+        description="Where the transfer is stored")
 
     @classmethod
     def poll(cls, context):
@@ -80,12 +88,14 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
     def draw(self, context):
         layout = self.layout
         layout.prop(self, "samples")
+        layout.prop(self, "store")
         row = layout.row()
         row.prop(self, "use_error_target")
         sub = row.row()
         sub.active = self.use_error_target
         sub.prop(self, "error_target")
-        for icon, text in dialog_lines(context.scene, _selected_meshes(context), self.samples):
+        for icon, text in dialog_lines(context.scene, _selected_meshes(context), self.samples,
+                                       self.store):
             panels.wrapped(layout, context, text, icon=icon)
 
     def execute(self, context):
@@ -98,7 +108,8 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
         try:
             target = self.error_target / 100.0 if self.use_error_target else None
             job = bake.Bake(context.scene, objects, self.samples,
-                            report=lambda text: self.report({"INFO"}, text), error_target=target)
+                            report=lambda text: self.report({"INFO"}, text), error_target=target,
+                            store=self.store)
         except (bake.TransferError, RuntimeError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
@@ -167,7 +178,8 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
         per_10k = info.seconds / max(info.vertices, 1) * 1e4
         self.report({"INFO"}, (
             f"Baked the transfer of {len(info.objects)} object(s): {info.vertices} vertices, "
-            f"{info.corners} corners, {info.samples} samples, {info.seconds:.1f} s "
+            f"{info.corners} corners, {info.texels} texels, {info.samples} samples, "
+            f"{info.seconds:.1f} s "
             f"({per_10k:.1f} s per 10k vertices)"))
         for reason in self._skipped:
             self.report({"WARNING"}, f"Not baked: {reason}")
@@ -176,15 +188,17 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
         return {"FINISHED"}
 
 
-def dialog_lines(scene, objects, samples):
+def dialog_lines(scene, objects, samples, store="AUTO"):
     """What the Bake dialog says before OK: [(icon, text)] the objects it cannot bake (why,
-    what to do), the cost (objects, vertices, estimated seconds) and coarse receivers."""
-    plan = bake.plan(scene, objects, samples)
+    what to do), the cost (objects, vertices, texels, estimated seconds) and the objects
+    baked per texel (or too coarse per corner)."""
+    plan = bake.plan(scene, objects, samples, store)
     lines = [("ERROR", f"Not baked: {reason}") for _name, reason in plan.refused]
     if plan.objects:
         lines.append(("TIME", (
-            f"Bakes {len(plan.objects)} object(s): {plan.vertices} vertices, {samples} "
-            f"samples, about {plan.seconds:.0f} s")))
+            f"Bakes {len(plan.objects)} object(s): {plan.vertices} vertices, "
+            + (f"{plan.texels} texels, " if plan.texels else "")
+            + f"{samples} samples, about {plan.seconds:.0f} s")))
     else:
         lines.append(("ERROR", "Nothing to bake: select meshes that can be baked"))
     lines.extend(("INFO", line) for line in plan.coarse)

@@ -84,7 +84,8 @@ def test_the_dialog_tells_refusals_and_cost_before_ok_and_the_others_are_baked(a
     assert ("ERROR", "Not baked: 'Box' has modifiers (Subdivision): the transfer is stored on "
             "the mesh itself, so apply them (or disable them for renders) and bake again"
             ) in lines, texts
-    cost = [t for t in texts if t.startswith("Bakes 1 object(s): 25 vertices, 64 samples, about")]
+    cost = [t for t in texts if t.startswith(
+        "Bakes 1 object(s): 25 vertices, 4096 texels, 64 samples, about")]  # the ground per texel
     assert cost and cost[0].endswith(" s"), texts
     _select([ground, box])
     assert bpy.ops.shlight.bake_transfer(samples=8) == {"FINISHED"}

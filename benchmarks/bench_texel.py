@@ -1,0 +1,124 @@
+"""`python -m benchmarks.bench_texel`: the transfer on a plain 4-vertex floor, per corner and
+per texel, against Cycles' own world lighting.
+
+The scene of ``bench_eevee_default`` (a plain 8 m floor, a cube, a UV sphere, a Suzanne) under
+real HDRIs; reference: Cycles path tracing of the world, ``REFERENCE_SAMPLES``. Rows, Cycles at
+64 spp: the world itself (no add-on); Transfer + Extract Lights (2) in Keep BSDF, baked per
+corner ("CORNERS") and by Default ("AUTO": the floor per texel). Relative RMSE over the floor
+and objects and over the floor's contact region, brightness, bake time. Writes its fragment of
+benchmarks/REPORT.md ("texel").
+"""
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import bpy
+import numpy as np
+
+from sh_lighting import api
+from sh_lighting.blender.shading import materials
+from sh_lighting.blender.transfer import apply as transfer_apply
+from sh_lighting.blender.transfer import bake
+
+from . import fragments
+from .bench_eevee_default import build_scene
+from .bench_real_scene import _render, _rrmse, id_masks
+
+HDRIS = ("sunrise", "forest", "courtyard")
+REFERENCE_SAMPLES = 1024
+SAMPLES = 64
+BAKE_SAMPLES = 64
+LIGHTS = 2
+
+
+def _row(name, image, reference, masks, seconds, bake_seconds=None):
+    everything = masks["diffuse"] | masks["ground"]
+    return {"method": name, "error": _rrmse(image, reference, everything),
+            "contact": _rrmse(image, reference, masks["contact"]),
+            "bright": float(image[everything].mean() / reference[everything].mean()),
+            "seconds": seconds, "bake": bake_seconds}
+
+
+def measure(hdri, folder, reference_samples):
+    path = Path(bpy.utils.system_resource("DATAFILES", path="studiolights/world")) / f"{hdri}.exr"
+    roles = build_scene(path)
+    scene = bpy.context.scene
+    masks = id_masks(scene, roles, folder)
+    objects = [o for group in roles.values() for o in group]
+    stem = Path(folder) / hdri
+    _, reference = _render(scene, f"{stem}_ref.exr", "CYCLES", reference_samples, seed=7)
+    floor = reference.mean(axis=2)
+    masks["contact"] = masks["ground"] & (floor < 0.5 * np.median(floor[masks["ground"]]))
+    seconds, image = _render(scene, f"{stem}_world.exr", "CYCLES", SAMPLES, seed=1)
+    rows = [_row(f"Cycles, world, {SAMPLES} spp (no add-on)", image, reference, masks, seconds)]
+    notes = []
+    for store in ("CORNERS", "AUTO"):
+        info = bake.bake_transfer(scene, objects, samples=BAKE_SAMPLES, store=store)
+        notes.append(f"{store}: {info.corners} corners, {info.texels} texels "
+                     f"({', '.join(info.texel_objects) or 'none'} per texel), "
+                     f"{info.seconds:.1f} s")
+        lights = api.extract_lights(scene, count=LIGHTS)
+        transfer_apply.apply_transfer(objects, scene, "KEEP_BSDF")
+        seconds, image = _render(scene, f"{stem}_{store}.exr", "CYCLES", SAMPLES, seed=2)
+        materials.remove_from_materials(materials.materials_of(objects))
+        api.compute_from_world(scene)  # deletes the extracted lights
+        label = "per corner" if store == "CORNERS" else "Default: the floor per texel"
+        rows.append(_row(f"Transfer ({label}) + Extract Lights ({len(lights.lights)}), "
+                         f"{SAMPLES} spp", image, reference, masks, seconds, info.seconds))
+        for obj in objects:
+            bake.remove_transfer(obj)
+    for row in rows:
+        print(f"{hdri}: {row}", flush=True)
+    return rows, notes
+
+
+def section(results, load, elapsed, reference_samples):
+    lines = [
+        "## Transfer on a plain floor: per corner and per texel", "",
+        f"`python -m benchmarks.bench_texel` (the scene of `bench_eevee_default`: a plain "
+        f"4-vertex 8 m floor, a cube, a UV sphere, a Suzanne; reference Cycles path tracing of "
+        f"the world, {reference_samples} spp; Cycles at {SAMPLES} spp, the bake at "
+        f"{BAKE_SAMPLES}; load average {load}; {elapsed:.0f} s in all). Error: relative RMSE "
+        "over the floor and objects, and over the floor's contact region (below half the "
+        "floor's median in the reference); bright: mean ÷ the reference's; contact ×: the "
+        "contact error over Cycles' own world's (goal ≤ 1.25).", "",
+    ]
+    for hdri, (rows, notes) in results.items():
+        base = rows[0]["contact"]
+        lines += [f"**{hdri}.exr**", "",
+                  "| method | error | contact err | contact × | bright | render | bake |",
+                  "|---|---|---|---|---|---|---|"]
+        for r in rows:
+            bake_time = "" if r["bake"] is None else f"{r['bake']:.1f} s"
+            lines.append(f"| {r['method']} | {r['error']:.1%} | {r['contact']:.1%} | "
+                         f"{r['contact'] / base:.2f} | {r['bright']:.3f} | "
+                         f"{r['seconds']:.1f} s | {bake_time} |")
+        lines += [""] + [f"- {note}" for note in notes] + [""]
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--hdris", nargs="*", default=list(HDRIS))
+    parser.add_argument("--reference-samples", type=int, default=REFERENCE_SAMPLES)
+    parser.add_argument("--no-write", action="store_true", help="print only")
+    args = parser.parse_args(argv)
+    started, load = time.perf_counter(), ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    results = {}
+    with tempfile.TemporaryDirectory() as folder:
+        for hdri in args.hdris:
+            results[hdri] = measure(hdri, folder, args.reference_samples)
+    load += " at the start, " + ", ".join(f"{v:.1f}" for v in os.getloadavg()) + " at the end"
+    text = section(results, load, time.perf_counter() - started, args.reference_samples)
+    print(text)
+    if not args.no_write:
+        fragments.write("texel", text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
