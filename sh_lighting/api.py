@@ -149,9 +149,10 @@ def bake_transfer(scene, objects, samples=_transfer.DEFAULT_SAMPLES, report=prin
     return _transfer.bake_transfer(scene, objects, samples, report, error_target, store)
 
 
-def transfer_refusal(scene, obj):
-    """Why ``obj`` cannot be transfer-baked in ``scene`` (one line with what to do), or None."""
-    return _transfer.refusal(scene, obj)
+def transfer_refusal(scene, obj, store="AUTO"):
+    """Why ``obj`` cannot be transfer-baked in ``scene`` with ``store`` (``bake_transfer``;
+    one line with what to do), or None."""
+    return _transfer.refusal(scene, obj, store=store)
 
 
 def transfer_status(scene, obj):

@@ -56,7 +56,7 @@ def run(args):
     else:  # every mesh the scene renders; those that cannot be baked are said and skipped
         objects = []
         for obj in (o for o in scene.objects if o.type == "MESH" and not o.hide_render):
-            reason = api.transfer_refusal(scene, obj)
+            reason = api.transfer_refusal(scene, obj, args.store.upper())
             if reason is None:
                 objects.append(obj)
             else:

@@ -18,7 +18,7 @@ MAX_SIZE = 2048
 
 class Atlas(NamedTuple):
     size: int  # texels across the square atlas
-    texel: float  # world units per texel
+    texels: list  # world units per texel, per mesh
     uv: list  # per mesh, (corners, 2) UV coordinates in 0 … 1
     covered: int  # texels inside charts
 
@@ -72,13 +72,16 @@ def _shelves(sizes, width):
 
 def pack(meshes, texel, max_size=MAX_SIZE):
     """Lay out ``meshes`` (each (positions, loop_starts, loop_totals) as ``face_charts``
-    takes) at ``texel`` world units per texel; an ``Atlas``. The texel grows (by √2 steps)
-    until the charts fit ``max_size``; the atlas is the smallest power of two that holds
-    them."""
+    takes) at ``texel`` world units per texel (one for all, or one per mesh); an ``Atlas``
+    (its ``texels``: each mesh's, as laid out). The texels grow together (by √2 steps) until the
+    charts fit ``max_size``; the atlas is the smallest power of two that holds them."""
     charts = [face_charts(*mesh) for mesh in meshes]
     extents = np.concatenate([extent for _, extent in charts])
+    scales = np.broadcast_to(np.asarray(texel, dtype=float), (len(meshes),))
+    per_face = np.repeat(scales, [len(m[1]) for m in meshes])[:, None]
+    grow = 1.0
     while True:
-        sizes = np.ceil(extents / texel).astype(np.int64) + 2 * PAD
+        sizes = np.ceil(extents / (per_face * grow)).astype(np.int64) + 2 * PAD
         size = 1 << max(4, math.ceil(math.log2(math.sqrt(float(np.prod(sizes, axis=1).sum()))
                                                + 1.0)))
         while size <= max_size:
@@ -88,23 +91,24 @@ def pack(meshes, texel, max_size=MAX_SIZE):
             size *= 2
         if size <= max_size:
             break
-        texel *= math.sqrt(2.0)
+        grow *= math.sqrt(2.0)
     uvs, first = [], 0
-    for (flat, extent), (_, loop_starts, loop_totals) in zip(charts, meshes):
+    for (flat, extent), (_, loop_starts, loop_totals), scale in zip(charts, meshes, scales):
         faces = len(loop_starts)
         face_of = np.repeat(np.arange(faces), loop_totals) + first
-        texels = offsets[face_of] + PAD + flat / texel
+        texels = offsets[face_of] + PAD + flat / (scale * grow)
         uvs.append(texels / size)
         first += faces
-    covered = int(np.prod(np.ceil(extents / texel), axis=1).sum())
-    return Atlas(size, texel, uvs, covered)
+    covered = int(np.prod(np.ceil(extents / (per_face * grow)), axis=1).sum())
+    return Atlas(size, [float(s * grow) for s in scales], uvs, covered)
 
 
-def texel_for(area, occluder_size, budget):
-    """World units per texel: a sixteenth of the smallest shadow-casting object near the
-    receivers (``occluder_size``), but no finer than ``area`` (their total surface) spread
-    over ``budget`` texels."""
-    return max(occluder_size / 16.0, math.sqrt(area / budget))
+def within_budget(areas, texels, budget):
+    """``texels`` (world units per texel, one per mesh of surface ``areas``) grown together
+    so that the meshes cover at most ``budget`` texels."""
+    texels = np.asarray(texels, dtype=float)
+    covered = float(np.sum(np.asarray(areas, dtype=float) / texels ** 2))
+    return texels * max(1.0, math.sqrt(covered / budget))
 
 
 def fill_hidden(values, written, seen, steps=PAD):

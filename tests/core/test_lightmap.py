@@ -60,8 +60,8 @@ def test_charts_do_not_overlap_and_leave_the_origin_empty():
 def test_the_texel_grows_until_the_charts_fit():
     atlas = lightmap.pack([_quad(100.0)], texel=0.01, max_size=256)
     assert atlas.size <= 256
-    assert atlas.texel >= 100.0 / (256 - 2 * lightmap.PAD)
-    assert atlas.texel < np.sqrt(2.0) * 100.0 / (256 - 2 * lightmap.PAD)
+    assert atlas.texels[0] >= 100.0 / (256 - 2 * lightmap.PAD)
+    assert atlas.texels[0] < np.sqrt(2.0) * 100.0 / (256 - 2 * lightmap.PAD)
 
 
 def test_a_warped_quad_and_a_degenerate_face_get_finite_coordinates():
@@ -71,6 +71,14 @@ def test_a_warped_quad_and_a_degenerate_face_get_finite_coordinates():
     assert np.isfinite(atlas.uv[0]).all()
 
 
-def test_texel_for_is_a_sixteenth_of_the_occluder_within_the_budget():
-    assert lightmap.texel_for(area=64.0, occluder_size=1.0, budget=65536) == 1.0 / 16
-    assert lightmap.texel_for(area=6400.0, occluder_size=1.0, budget=6400) == 1.0
+def test_texels_grow_together_to_the_budget():
+    assert list(lightmap.within_budget([64.0, 1.0], [0.0625, 0.01], budget=1e6)) == [0.0625, 0.01]
+    grown = lightmap.within_budget([64.0, 1.0], [0.0625, 0.01], budget=16384)
+    assert grown[0] / grown[1] == pytest.approx(6.25)
+    assert 64.0 / grown[0] ** 2 + 1.0 / grown[1] ** 2 == pytest.approx(16384)
+
+
+def test_each_mesh_keeps_its_own_texel_size():
+    atlas = lightmap.pack([_quad(8.0), _quad(1.0)], texel=[8.0 / 100, 1.0 / 50])
+    assert np.linalg.norm(atlas.uv[0][1] - atlas.uv[0][0]) * atlas.size == pytest.approx(100.0)
+    assert np.linalg.norm(atlas.uv[1][1] - atlas.uv[1][0]) * atlas.size == pytest.approx(50.0)

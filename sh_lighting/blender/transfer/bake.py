@@ -44,6 +44,14 @@ SECONDS_PER_BASIS = 0.05
 #: for the others; "CORNERS" or "TEXELS" for every mesh.
 STORES = ("AUTO", "CORNERS", "TEXELS")
 SCRATCH_UV = "sh_transfer_uv_bake"  # the atlas UV map while a bake runs
+#: Modifiers that keep each face's UVs inside its own chart (they move or subdivide faces, make
+#: none from nothing): a mesh with these is baked per texel on what Cycles renders. Others
+#: (Mirror and Array overlap the charts, Bevel and Boolean make faces between them) are refused.
+TEXEL_MODIFIERS = {
+    "SUBSURF", "MULTIRES", "TRIANGULATE", "WEIGHTED_NORMAL", "DISPLACE", "SMOOTH",
+    "CORRECTIVE_SMOOTH", "LAPLACIANSMOOTH", "SHRINKWRAP", "CAST", "SIMPLE_DEFORM", "WAVE",
+    "ARMATURE", "LATTICE", "CURVE", "HOOK", "MESH_DEFORM", "SURFACE_DEFORM", "WARP",
+}
 
 
 class TransferError(ValueError):
@@ -62,9 +70,13 @@ class BakeInfo(NamedTuple):
     texels: int = 0  # texels baked (inside the atlas's charts)
 
 
-def refusal(scene, obj, view_layer=None):
-    """Why ``obj`` (a Blender object) cannot be baked in ``scene`` (one line: what is wrong
-    and what to do), or None."""
+def _render_modifiers(obj):
+    return [m for m in obj.modifiers if m.show_render]
+
+
+def refusal(scene, obj, view_layer=None, store="AUTO"):
+    """Why ``obj`` (a Blender object) cannot be baked in ``scene`` with ``store`` (one line:
+    what is wrong and what to do), or None."""
     view_layer = view_layer or view_layer_of(scene)
     name = obj.name
     if obj.type != "MESH":
@@ -79,7 +91,8 @@ def refusal(scene, obj, view_layer=None):
         return f"'{name}' is hidden from renders: enable it for renders"
     if not obj.visible_get(view_layer=view_layer):
         return f"'{name}' is hidden in the view layer: unhide it to bake it"
-    modifiers = [m.name for m in obj.modifiers if m.show_render]
+    modifiers = [m.name for m in _render_modifiers(obj)
+                 if store == "CORNERS" or m.type not in TEXEL_MODIFIERS]
     if modifiers:
         return (f"'{name}' has modifiers ({', '.join(modifiers)}): the transfer is stored on "
                 "the mesh itself, so apply them (or disable them for renders) and bake again")
@@ -110,7 +123,7 @@ def remove_transfer(obj):
     return found
 
 
-def check_objects(scene, objects):
+def check_objects(scene, objects, store="AUTO"):
     """The objects as a list if every one can be baked, else a TransferError naming the first
     problem (one line: what is wrong and what to do)."""
     if scene is None:
@@ -122,7 +135,7 @@ def check_objects(scene, objects):
     for obj in picked:
         if not isinstance(obj, bpy.types.Object):
             raise TransferError(f"{obj!r} is not an object: pass Blender objects")
-        reason = refusal(scene, obj, view_layer)
+        reason = refusal(scene, obj, view_layer, store)
         if reason:
             raise TransferError(reason)
     if len({o.as_pointer() for o in picked}) != len(picked):
@@ -145,7 +158,7 @@ def plan(scene, objects, samples, store="AUTO"):
     view_layer = view_layer_of(scene)
     bakeable, refused = [], []
     for obj in objects:
-        reason = refusal(scene, obj, view_layer)
+        reason = refusal(scene, obj, view_layer, store)
         if reason:
             refused.append((obj.name, reason))
         else:
@@ -172,22 +185,36 @@ def _split(scene, picked, store):
         raise TransferError(f"store {store!r}: use one of {', '.join(STORES)}")
     if store == "CORNERS" or not picked:
         return _Split(list(picked), [], None, [])
-    found = {o.name: (size, line) for o, size, line in coverage.coarse(scene, picked)}
-    if store == "TEXELS":
-        chosen = list(picked)
-    else:
-        chosen = [o for o in picked if o.name in found]
+    found = {o.name: size for o, size, _ in coverage.coarse(scene, picked)}
+    reasons = {}
+    for obj in picked:
+        modifiers = [m.name for m in _render_modifiers(obj)]
+        if obj.name in found:
+            reasons[obj.name] = "too coarse for a shadow at its corners"
+        elif modifiers:
+            reasons[obj.name] = f"its modifiers ({', '.join(modifiers)}) change it at render time"
+        elif store == "TEXELS":
+            reasons[obj.name] = "asked for"
+    chosen = [o for o in picked if o.name in reasons]
     if not chosen:
         return _Split(list(picked), [], None, [])
-    sizes = [found[o.name][0] for o in chosen if o.name in found]
-    occluder = min(sizes) if sizes else min(max(o.dimensions) for o in chosen) / 8.0
-    atlas = texels.layout(chosen, occluder)
+    atlas = texels.layout(chosen, [_texel_size(o, found.get(o.name)) for o in chosen])
     lines = []
-    for obj in chosen:
-        why = "too coarse for a shadow at its corners" if obj.name in found else "asked for"
-        lines.append(f"'{obj.name}' is baked per texel ({why}): {atlas.texel * 100:.2g} cm "
-                     f"texels, a {atlas.size} × {atlas.size} atlas")
+    for obj, texel in zip(chosen, atlas.texels):
+        lines.append(f"'{obj.name}' is baked per texel ({reasons[obj.name]}): "
+                     f"{texel * 100:.2g} cm texels, a {atlas.size} × {atlas.size} atlas")
     return _Split([o for o in picked if o not in chosen], chosen, atlas, lines)
+
+
+def _texel_size(obj, occluder_size):
+    """World units per texel for ``obj``: a sixteenth of the occluder it is too coarse for,
+    else a quarter of its median edge (a face of its cage gets about 4 × 4 texels), at most
+    a thirty-second of its size."""
+    if occluder_size:
+        return occluder_size / 16.0
+    size = max(obj.dimensions) / 32.0
+    edge = texels.median_edge(obj) / 4.0
+    return min(edge, size) if edge > 0 else size
 
 
 def estimate_seconds(scene, corners, samples):
@@ -241,14 +268,14 @@ class Bake:
     def __init__(self, scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None,
                  store="AUTO"):
         self.scene = scene
-        self.picked = check_objects(scene, objects)
+        self.picked = check_objects(scene, objects, store)
         self.notes = []
         if store != "CORNERS":  # one atlas per file: the others baked per texel join it
             view_layer = view_layer_of(scene)
             for obj in texels.texel_objects():
                 if obj in self.picked:
                     continue
-                if refusal(scene, obj, view_layer) is None:
+                if refusal(scene, obj, view_layer, store) is None:
                     self.picked.append(obj)
                     self.notes.append(f"'{obj.name}' is baked again: the objects baked per "
                                       "texel share one atlas")
@@ -261,7 +288,8 @@ class Bake:
         self.report = report or (lambda text: None)
         self.started = time.perf_counter()
         if error_target is not None:
-            samples, probe_noise = choose_samples(scene, self.picked, error_target)
+            samples, probe_noise = choose_samples(scene, self.picked, error_target,
+                                                  store=store)
             chosen = (f"{samples} samples chosen for a noise of {100 * error_target:.2g} % "
                       f"(measured {100 * probe_noise:.2g} % at 16 samples)")
             self.notes.append(chosen)
@@ -355,9 +383,10 @@ class Bake:
                         split.atlas.covered if split.atlas else 0)
 
 
-def choose_samples(scene, objects, error_target, probe=16):
+def choose_samples(scene, objects, error_target, probe=16, store="AUTO"):
     """(samples, probe error): the bake samples for which the noise of T_00 (relative RMS over
-    the corners) is about ``error_target`` (a fraction, e.g. 0.01).
+    the corners and texels, stored as ``store`` says) is about ``error_target`` (a fraction,
+    e.g. 0.01).
 
     Two bakes of the constant world at ``probe`` samples with different Cycles seeds give the
     noise at ``probe`` (RMS of their difference / √2, relative to the RMS of their mean);
@@ -365,18 +394,21 @@ def choose_samples(scene, objects, error_target, probe=16):
     1 … MAX_SAMPLES. The other eight transfers are differences of bakes of the same noise, so
     their noise is of the same size (benchmarks/REPORT.md, "Transfer", measures the result).
     """
-    picked = check_objects(scene, objects)
+    picked = check_objects(scene, objects, store)
     if not (isinstance(error_target, (int, float)) and 0.0 < error_target < 1.0):
         raise TransferError(f"error target {error_target!r}: use a fraction between 0 and 1")
-    corners_only = _Split(picked, [], None, [])
-    saved = _Saved(scene, picked, corners_only)
+    split = _split(scene, picked, store)
+    saved = _Saved(scene, picked, split)
     seed = scene.cycles.seed
     try:
         saved.prepare(probe)
         runs = []
         for offset in (0, 1):
             scene.cycles.seed = seed + offset
-            runs.append(np.concatenate(_bake_basis(scene, saved, corners_only, 0)[0]))
+            rows, atlas = _bake_basis(scene, saved, split, 0)
+            if atlas is not None:
+                rows.append(atlas[(atlas != texels.UNWRITTEN).all(axis=1)])
+            runs.append(np.concatenate(rows))
     finally:
         scene.cycles.seed = seed
         saved.restore()

@@ -43,13 +43,27 @@ def world_corners(obj):
     return points[corners], starts, totals
 
 
-def layout(objects, occluder_size):
-    """A ``lightmap.Atlas`` of ``objects`` at a sixteenth of ``occluder_size`` per texel,
-    coarser if their area needs more than ``BUDGET`` texels."""
+def layout(objects, texel_sizes):
+    """A ``lightmap.Atlas`` of ``objects`` at ``texel_sizes`` (world units per texel, one per
+    object), all coarser together if they would cover more than ``BUDGET`` texels."""
     meshes = [world_corners(o) for o in objects]
-    area = sum(float(np.sum(extent[:, 0] * extent[:, 1]))
-               for extent in (lightmap.face_charts(*m)[1] for m in meshes))
-    return lightmap.pack(meshes, lightmap.texel_for(area, occluder_size, BUDGET))
+    areas = [float(np.sum(extent[:, 0] * extent[:, 1]))
+             for extent in (lightmap.face_charts(*m)[1] for m in meshes)]
+    return lightmap.pack(meshes, lightmap.within_budget(areas, texel_sizes, BUDGET))
+
+
+def median_edge(obj):
+    """The median edge length of ``obj``'s mesh in world units (its scale applied)."""
+    mesh = obj.data
+    coordinates = np.empty(len(mesh.vertices) * 3)
+    mesh.vertices.foreach_get("co", coordinates)
+    edges = np.empty(len(mesh.edges) * 2, dtype=np.int64)
+    mesh.edges.foreach_get("vertices", edges)
+    points = coordinates.reshape(-1, 3) @ np.array(obj.matrix_world, dtype=float)[:3, :3].T
+    pairs = points[edges.reshape(-1, 2)]
+    if len(pairs) == 0:
+        return 0.0
+    return float(np.median(np.linalg.norm(pairs[:, 0] - pairs[:, 1], axis=1)))
 
 
 def set_uv(obj, uv, name=UV_NAME):

@@ -101,8 +101,10 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
     def execute(self, context):
         quiet_image_library()
         selected = _selected_meshes(context)
-        objects = [o for o in selected if bake.refusal(context.scene, o) is None]
-        skipped = [bake.refusal(context.scene, o) for o in selected if o not in objects]
+        objects = [o for o in selected
+                   if bake.refusal(context.scene, o, store=self.store) is None]
+        skipped = [bake.refusal(context.scene, o, store=self.store)
+                   for o in selected if o not in objects]
         if not objects:  # nothing to bake: the first reason, as the bake itself gives it
             objects, skipped = selected, []
         try:

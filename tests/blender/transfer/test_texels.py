@@ -145,3 +145,45 @@ def test_an_image_of_the_users_with_the_atlas_name_is_refused_and_kept():
                        "did not make: rename it to bake per texel"), message
     assert bpy.data.images[bake.IMAGE_NAMES[3]] == theirs and bake.record(ground) is None
     assert bake.UV_NAME not in ground.data.uv_layers
+
+
+@pytest.mark.slow
+def test_suzanne_with_a_subdivision_modifier_is_baked_per_texel_as_rendered(tmp_path):
+    """Per corner a modifier is refused (the corners Cycles renders are not the mesh's); per
+    texel the atlas's UV map follows the subdivision. Measured: 1.25 % over the image, 10 s
+    bake (26k texels at 64 samples)."""
+    scene, ground, box = _plain_floor_scene()
+    box.hide_render = True
+    monkey = ts.mesh_object("Suzanne", lambda bm: bmesh.ops.create_monkey(bm), (0.3, 0.2, 0.45))
+    monkey.scale = (0.5, 0.5, 0.5)
+    monkey.data.materials.append(box.data.materials[0])
+    subdivision = monkey.modifiers.new("Subdivision", "SUBSURF")
+    subdivision.levels, subdivision.render_levels = 1, 2
+    bpy.context.view_layer.update()
+    assert bake.refusal(scene, monkey, store="CORNERS").startswith(
+        "'Suzanne' has modifiers (Subdivision)")
+    scene.cycles.samples = 512
+    reference, alpha, _ = scenes.render(scene, tmp_path / "reference.exr")
+    info = bake.bake_transfer(scene, [ground, monkey], samples=64)
+    assert info.texel_objects == ["Ground", "Suzanne"]
+    assert any(note.startswith("'Suzanne' is baked per texel (its modifiers (Subdivision) "
+                               "change it at render time): ") for note in info.notes)
+    ts.use_material([ground, monkey], ts.transfer_material())
+    scene.cycles.samples = 16
+    image, _, _ = scenes.render(scene, tmp_path / "texels.exr")
+    everything, _ = _masks(reference, alpha)
+    error = ts.relative_rmse(image, reference, everything)
+    brightness = image[everything].mean() / reference[everything].mean()
+    assert error < ERROR_TOLERANCE and abs(brightness - 1.0) < 0.01, (error, brightness)
+    subdivision.render_levels = 3
+    bpy.context.view_layer.update()
+    assert bake.status(scene, monkey)[0] == "STALE"
+
+
+def test_modifiers_that_overlap_the_charts_are_refused_per_texel_too():
+    scene, ground, box = _plain_floor_scene()
+    box.modifiers.new("Array", "ARRAY")
+    with pytest.raises(bake.TransferError) as caught:
+        bake.bake_transfer(scene, [ground, box], samples=1, store="TEXELS")
+    assert str(caught.value).startswith("'Box' has modifiers (Array): ")
+    assert bake.record(ground) is None and bake.UV_NAME not in ground.data.uv_layers

@@ -70,19 +70,19 @@ def test_polls_say_why(addon):
 
 def test_bake_refusal_is_reported_and_changes_nothing(addon):
     scene, ground, box = _scene()
-    box.modifiers.new("Subdivision", "SUBSURF")
+    box.modifiers.new("Bevel", "BEVEL")
     _select([box])
-    with pytest.raises(RuntimeError, match="'Box' has modifiers \\(Subdivision\\)"):
+    with pytest.raises(RuntimeError, match="'Box' has modifiers \\(Bevel\\)"):
         bpy.ops.shlight.bake_transfer(samples=8)
     assert bake.record(box) is None and not box.data.color_attributes
 
 
 def test_the_dialog_tells_refusals_and_cost_before_ok_and_the_others_are_baked(addon):
     scene, ground, box = _scene()
-    box.modifiers.new("Subdivision", "SUBSURF")
+    box.modifiers.new("Mirror", "MIRROR")  # overlaps the atlas's charts: refused
     lines = transfer_ui.dialog_lines(scene, [ground, box], samples=64)
     texts = [text for _icon, text in lines]
-    assert ("ERROR", "Not baked: 'Box' has modifiers (Subdivision): the transfer is stored on "
+    assert ("ERROR", "Not baked: 'Box' has modifiers (Mirror): the transfer is stored on "
             "the mesh itself, so apply them (or disable them for renders) and bake again"
             ) in lines, texts
     cost = [t for t in texts if re.fullmatch(  # the ground per texel: its texels counted
