@@ -133,3 +133,23 @@ def fill_hidden(values, written, seen, steps=PAD):
                           values)
         valid = valid | fill
     return values
+
+
+def push_pull(values, known):
+    """``values`` (size, size, c), size a power of two, with the texels not ``known`` filled
+    from the known ones around them (push-pull: averages of the known texels down a pyramid,
+    read back up for the unknown ones), so that a filtered or mipmapped read of a chart's
+    edge does not blend in empty texels. Returns a new array."""
+    levels = [(np.where(known[..., None], values, 0.0), known.astype(float))]
+    while levels[-1][0].shape[0] > 1:
+        total, weight = levels[-1]
+        h = total.shape[0] // 2
+        summed = (total * weight[..., None]).reshape(h, 2, h, 2, -1).sum(axis=(1, 3))
+        count = weight.reshape(h, 2, h, 2).sum(axis=(1, 3))
+        mean = summed / np.maximum(count, 1e-30)[..., None]
+        levels.append((mean, (count > 0).astype(float)))
+    filled = levels[-1][0]
+    for total, weight in reversed(levels[:-1]):
+        coarse = np.repeat(np.repeat(filled, 2, axis=0), 2, axis=1)
+        filled = np.where(weight[..., None] > 0, total, coarse)
+    return filled

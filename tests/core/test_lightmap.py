@@ -82,3 +82,17 @@ def test_each_mesh_keeps_its_own_texel_size():
     atlas = lightmap.pack([_quad(8.0), _quad(1.0)], texel=[8.0 / 100, 1.0 / 50])
     assert np.linalg.norm(atlas.uv[0][1] - atlas.uv[0][0]) * atlas.size == pytest.approx(100.0)
     assert np.linalg.norm(atlas.uv[1][1] - atlas.uv[1][0]) * atlas.size == pytest.approx(50.0)
+
+
+def test_push_pull_keeps_known_texels_and_fills_the_rest_from_them():
+    values = np.zeros((8, 8, 2))
+    known = np.zeros((8, 8), dtype=bool)
+    values[2:4, 2:4] = (3.0, -1.0)
+    known[2:4, 2:4] = True
+    values[6, 6] = (5.0, 5.0)
+    known[6, 6] = True
+    filled = lightmap.push_pull(values, known)
+    assert np.array_equal(filled[known], values[known])
+    assert np.array_equal(filled[0, 0], (3.0, -1.0))  # only the block is near
+    low, high = values[known].min(axis=0), values[known].max(axis=0)
+    assert ((filled >= low) & (filled <= high)).all()  # means of known texels only

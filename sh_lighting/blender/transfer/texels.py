@@ -18,6 +18,7 @@ SCRATCH_IMAGE = "SH Transfer bake (temporary)"
 SCRATCH_NODE = "sh_transfer_bake_target"
 MARGIN = 2  # texels the bake extends each chart by (``lightmap.PAD`` leaves room)
 UNWRITTEN = -1.0  # the scratch image before a bake: texels the bake leaves so are no chart's
+ORIGIN = 2  # texels across the atlas's corner at (0, 0) kept 0 (``lightmap.PAD`` leaves room)
 HIDDEN = 0.02  # texels getting less of a constant world than this are under another object
 BUDGET = 1 << 18  # texels the atlas may cover before its texel grows (~2 min at 64 samples)
 
@@ -83,11 +84,19 @@ def set_uv(obj, uv, name=UV_NAME):
 def fill_hidden(transfer, constant, size):
     """``transfer`` (9, size², 3) with the texels under other objects filled from their
     neighbours (``lightmap.fill_hidden``): those the constant world's bake ``constant``
-    (size², 3; 1 where nothing occludes) lit less than ``HIDDEN``; never-written texels 0."""
+    (size², 3; 1 where nothing occludes) lit less than ``HIDDEN``; the texels outside the
+    charts from the charts around them."""
     written = (constant != UNWRITTEN).all(axis=1).reshape(size, size)
     seen = (constant.mean(axis=1) >= HIDDEN).reshape(size, size)
-    grid = transfer.reshape(len(transfer), size, size, -1)
-    return lightmap.fill_hidden(grid, written, seen).reshape(transfer.shape)
+    grid = lightmap.fill_hidden(transfer.reshape(len(transfer), size, size, -1), written, seen)
+    # Every other texel from the charts (push-pull): EEVEE mipmaps the images, and a mip
+    # level that averaged in empty texels would darken the charts' edges; the texels at (0, 0)
+    # stay 0 for the meshes without the UV map.
+    stacked = np.moveaxis(grid, 0, 2).reshape(size, size, -1)
+    stacked = lightmap.push_pull(stacked, written)
+    stacked[:ORIGIN, :ORIGIN] = 0.0
+    grid = np.moveaxis(stacked.reshape(size, size, len(transfer), -1), 2, 0)
+    return grid.reshape(transfer.shape)
 
 
 def foreign_image():
