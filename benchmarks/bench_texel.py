@@ -20,12 +20,13 @@ import bpy
 import numpy as np
 
 from sh_lighting import api
+from sh_lighting.blender.data import compat
 from sh_lighting.blender.shading import materials
 from sh_lighting.blender.transfer import apply as transfer_apply
 from sh_lighting.blender.transfer import bake
 
 from . import fragments
-from .bench_eevee_default import build_scene
+from .bench_eevee_default import EEVEE_SAMPLES, build_scene
 from .bench_real_scene import _render, _rrmse, id_masks
 
 HDRIS = ("sunrise", "forest", "courtyard")
@@ -43,7 +44,7 @@ def _row(name, image, reference, masks, seconds, bake_seconds=None):
             "seconds": seconds, "bake": bake_seconds}
 
 
-def measure(hdri, folder, reference_samples):
+def measure(hdri, folder, reference_samples, eevee=False):
     path = Path(bpy.utils.system_resource("DATAFILES", path="studiolights/world")) / f"{hdri}.exr"
     roles = build_scene(path)
     scene = bpy.context.scene
@@ -55,6 +56,9 @@ def measure(hdri, folder, reference_samples):
     masks["contact"] = masks["ground"] & (floor < 0.5 * np.median(floor[masks["ground"]]))
     seconds, image = _render(scene, f"{stem}_world.exr", "CYCLES", SAMPLES, seed=1)
     rows = [_row(f"Cycles, world, {SAMPLES} spp (no add-on)", image, reference, masks, seconds)]
+    if eevee:
+        seconds, image = _render(scene, f"{stem}_eevee_world.exr", compat.eevee_engine_id())
+        rows.append(_row("EEVEE, world (no add-on)", image, reference, masks, seconds))
     notes = []
     for store in ("CORNERS", "AUTO"):
         info = bake.bake_transfer(scene, objects, samples=BAKE_SAMPLES, store=store)
@@ -69,6 +73,16 @@ def measure(hdri, folder, reference_samples):
         label = "per corner" if store == "CORNERS" else "Default: the floor per texel"
         rows.append(_row(f"Transfer ({label}) + Extract Lights ({len(lights.lights)}), "
                          f"{SAMPLES} spp", image, reference, masks, seconds, info.seconds))
+        if eevee and store == "AUTO":
+            lights = api.extract_lights(scene, count=LIGHTS)
+            transfer_apply.apply_transfer(objects, scene, "KEEP_BSDF")
+            seconds, image = _render(scene, f"{stem}_eevee_{store}.exr",
+                                     compat.eevee_engine_id())
+            materials.remove_from_materials(materials.materials_of(objects))
+            api.compute_from_world(scene)
+            rows.append(_row(f"EEVEE Transfer ({label}) + Extract Lights "
+                             f"({len(lights.lights)})", image, reference, masks, seconds,
+                             info.seconds))
         for obj in objects:
             bake.remove_transfer(obj)
     for row in rows:
@@ -85,7 +99,8 @@ def section(results, load, elapsed, reference_samples):
         f"{BAKE_SAMPLES}; load average {load}; {elapsed:.0f} s in all). Error: relative RMSE "
         "over the floor and objects, and over the floor's contact region (below half the "
         "floor's median in the reference); bright: mean ÷ the reference's; contact ×: the "
-        "contact error over Cycles' own world's (goal ≤ 1.25).", "",
+        "contact error over Cycles' own world's (goal ≤ 1.25 in Cycles); EEVEE "
+        f"{EEVEE_SAMPLES} samples, its times include shader compiles.", "",
     ]
     for hdri, (rows, notes) in results.items():
         base = rows[0]["contact"]
@@ -105,13 +120,16 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hdris", nargs="*", default=list(HDRIS))
     parser.add_argument("--reference-samples", type=int, default=REFERENCE_SAMPLES)
+    parser.add_argument("--eevee", action="store_true",
+                        help="also EEVEE rows (its own world, Transfer by Default): minutes "
+                        "of shader compiles under software OpenGL")
     parser.add_argument("--no-write", action="store_true", help="print only")
     args = parser.parse_args(argv)
     started, load = time.perf_counter(), ", ".join(f"{v:.1f}" for v in os.getloadavg())
     results = {}
     with tempfile.TemporaryDirectory() as folder:
         for hdri in args.hdris:
-            results[hdri] = measure(hdri, folder, args.reference_samples)
+            results[hdri] = measure(hdri, folder, args.reference_samples, args.eevee)
     load += " at the start, " + ", ".join(f"{v:.1f}" for v in os.getloadavg()) + " at the end"
     text = section(results, load, time.perf_counter() - started, args.reference_samples)
     print(text)

@@ -187,3 +187,37 @@ def test_modifiers_that_overlap_the_charts_are_refused_per_texel_too():
         bake.bake_transfer(scene, [ground, box], samples=1, store="TEXELS")
     assert str(caught.value).startswith("'Box' has modifiers (Array): ")
     assert bake.record(ground) is None and bake.UV_NAME not in ground.data.uv_layers
+
+
+@pytest.mark.slow
+def test_eevee_renders_the_texel_shadow(tmp_path):
+    """EEVEE reads the atlas (its Image Texture nodes, mipmapped) as Cycles does: on the floor
+    around the box, the per-texel render is darker than the per-corner one by what Cycles
+    shows, and far from the box they agree. Its first run compiles the shaders (minutes under
+    software OpenGL, seconds with Mesa's cache)."""
+    from sh_lighting.blender.data import compat
+
+    scene, ground, box = _plain_floor_scene()
+    scene.eevee.taa_render_samples = 4
+    grey, transfer = box.data.materials[0], ts.transfer_material()
+    renders = {}
+    for store in ("CORNERS", "AUTO"):
+        ts.use_material([ground, box], grey)
+        bake.bake_transfer(scene, [ground, box], samples=64, store=store)
+        ts.use_material([ground, box], transfer)
+        for engine in ("CYCLES", compat.eevee_engine_id()):
+            scene.render.engine = engine
+            image, alpha, _ = scenes.render(scene, tmp_path / f"{store}_{engine}.exr")
+            renders[store, engine] = image.mean(axis=2)
+    corners = renders["CORNERS", "CYCLES"]
+    shade = renders["AUTO", "CYCLES"] / np.maximum(corners, 1e-6)
+    covered = alpha > 0.999
+    contact = covered & (shade < 0.9)  # where the texels darken the floor in Cycles
+    far = covered & (np.abs(shade - 1.0) < 0.01)
+    assert contact.sum() > 20 and far.sum() > 200
+    engine = compat.eevee_engine_id()
+    eevee = renders["AUTO", engine] / np.maximum(renders["CORNERS", engine], 1e-6)
+    print(f"\ncontact: Cycles {shade[contact].mean():.3f}, EEVEE {eevee[contact].mean():.3f}; "
+          f"far: EEVEE {eevee[far].mean():.4f}")
+    assert abs(eevee[contact].mean() - shade[contact].mean()) < 0.03
+    assert abs(eevee[far].mean() - 1.0) < 0.01
