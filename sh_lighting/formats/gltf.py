@@ -85,16 +85,27 @@ def face_directions(face, size, u=None, v=None):
     return face_lookup_directions(face, size, u, v) @ BLENDER_TO_BABYLON_LOOKUP
 
 
+# The one non-zero entry of each face's s and t axis (FACE_AXES) and its sign: s_c and t_c of a
+# direction are ± one of its coordinates over the major one (``cube_texel_index``).
+_S_AXIS, _T_AXIS = (np.argmax(np.abs(FACE_AXES[:, k]), axis=-1) for k in (1, 2))
+_S_SIGN, _T_SIGN = (FACE_AXES[np.arange(6), k, axis] for k, axis in ((1, _S_AXIS), (2, _T_AXIS)))
+
+
 def cube_texel_index(directions, size):
-    """Flat index face·s² + row·s + column of the texel holding each Blender direction."""
+    """Flat index face·s² + row·s + column of the texel holding each Blender direction.
+
+    s_c = (d · s axis) / |major| with an s axis of one ±1 entry is that coordinate of d,
+    signed, over |major|: picked, not summed with the zero products (an einsum over a
+    gathered (N, 3, 3) array of axes took 0.05-0.15 s of a .gltf export at 8K; the same
+    values to the bit, the zeros added nothing).
+    """
     d = np.asarray(directions, dtype=np.float64) @ BLENDER_TO_BABYLON_LOOKUP.T
     axis = np.argmax(np.abs(d), axis=-1)
-    negative = np.take_along_axis(d, axis[..., None], -1)[..., 0] < 0
-    face = 2 * axis + negative
-    axes = FACE_AXES[face]  # (..., 3, 3): major, s axis, t axis
-    major = np.abs(np.take_along_axis(d, axis[..., None], -1)[..., 0])
-    sc = np.einsum("...i,...i->...", d, axes[..., 1, :]) / major
-    tc = np.einsum("...i,...i->...", d, axes[..., 2, :]) / major
+    picked = np.take_along_axis(d, axis[..., None], -1)[..., 0]
+    face = 2 * axis + (picked < 0)
+    major = np.abs(picked)
+    sc = np.take_along_axis(d, _S_AXIS[face][..., None], -1)[..., 0] * _S_SIGN[face] / major
+    tc = np.take_along_axis(d, _T_AXIS[face][..., None], -1)[..., 0] * _T_SIGN[face] / major
     col = np.clip(((sc + 1.0) * 0.5 * size).astype(np.int64), 0, size - 1)
     row = np.clip(((1.0 - tc) * 0.5 * size).astype(np.int64), 0, size - 1)
     return (face * size + row) * size + col
