@@ -2,28 +2,36 @@
 
 Each module exports ``register()``/``unregister()``; they are called in ``MODULES`` order
 and undone in reverse.
+
+The UI modules (panels, operators, popovers) are imported on first use of ``MODULES`` (by
+``register``), not with this package: a command line run (``python -m sh_lighting
+compute``) reads an image through ``blender.world`` and draws no panel, and importing the UI
+cost it about 0.1 s of its start (benchmarks/fragments/commands.md).
 """
 
-from .data import preferences, settings
-from .ui import design as design_ui
-from .ui import lights as lights_ui
-from .ui import luminaire as luminaire_ui
-from .ui import operators, panels
-from .ui import photo as photo_ui
-from .ui import presets as presets_ui
-from .ui import transfer as transfer_ui
+import importlib
 
-MODULES = (
-    preferences, settings, operators, panels, presets_ui, design_ui, lights_ui, transfer_ui,
-    photo_ui, luminaire_ui,
+# (module path under this package, in register order)
+_MODULE_NAMES = (
+    "data.preferences", "data.settings", "ui.operators", "ui.panels", "ui.presets",
+    "ui.design", "ui.lights", "ui.transfer", "ui.photo", "ui.luminaire",
 )
 
 
+def __getattr__(name):
+    """``MODULES``: the modules registered, imported on first use (PEP 562)."""
+    if name == "MODULES":
+        modules = tuple(importlib.import_module(f"{__name__}.{path}") for path in _MODULE_NAMES)
+        globals()["MODULES"] = modules
+        return modules
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 def register():
-    for module in MODULES:
+    for module in __getattr__("MODULES"):
         module.register()
 
 
 def unregister():
-    for module in reversed(MODULES):
+    for module in reversed(__getattr__("MODULES")):
         module.unregister()
