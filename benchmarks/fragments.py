@@ -35,6 +35,7 @@ ORDER = (
     "real_scene",
     "real_scene_reading",
     "world_edit",
+    "world_edit_reading",
     "eevee_default",
     "eevee_default_reading",
     "commands",
