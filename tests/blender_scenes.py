@@ -8,6 +8,8 @@ the passes of a multilayer file) and compares each covered pixel with the core's
 
 import math
 import struct
+import subprocess
+import sys
 from math import pi
 from pathlib import Path
 
@@ -117,6 +119,22 @@ def render(scene, path):
     scene.render.filepath = str(path)
     bpy.ops.render.render(write_still=True)
     return unpack(read_exr(path), scene.view_layers[0].name)
+
+
+def render_without_the_add_on(blend, out):
+    """Render ``blend``'s current frame to ``out`` in a fresh Python process that never
+    imports the add-on; its rgb (rows top to bottom). Fails if the process does, or names
+    sh_lighting in its output."""
+    code = (
+        "import bpy; bpy.ops.wm.open_mainfile(filepath=%r); "
+        "bpy.context.scene.render.filepath = %r; bpy.ops.render.render(write_still=True)"
+        % (str(blend), str(out))
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            timeout=600, cwd=str(Path(out).parent))
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "sh_lighting" not in result.stdout + result.stderr
+    return unpack(read_exr(out))[0]
 
 
 def unpack(channels, layer="ViewLayer"):
