@@ -43,7 +43,7 @@ from pathlib import Path
 
 import bpy
 import numpy as np
-from mathutils import Matrix, Vector
+from mathutils import Vector
 
 from ...core.blackbody import blackbody_rgb
 from ...core.lamp_fit import (
@@ -59,6 +59,7 @@ from ...core.sh import sh_basis
 from ...formats.ies import parse_ies
 from ...formats.photometric_file import read_with_ies_text
 from ...formats.photometry import PhotometryError
+from . import lights
 
 __all__ = (
     "FitSettings",
@@ -79,9 +80,8 @@ __all__ = (
 
 REGISTRY = "sh_lighting_luminaires"  # scene property: {key: {"root", "lamps", "text", "cycles"}}
 INFO = "sh_luminaire"  # the luminaire light's read-only summary (a custom property)
-LUMENS_PER_WATT = 177.83  # Blender's IES node: D65's luminous efficacy
-CANDELA_TO_WATT = 4.0 * math.pi / LUMENS_PER_WATT  # Blender's IES node: Strength per candela
-FACTORS = ("diffuse_factor", "specular_factor", "volume_factor", "transmission_factor")
+LUMENS_PER_WATT = lights.LUMENS_PER_WATT
+FACTORS = lights.FACTORS
 
 
 @dataclass(frozen=True)
@@ -107,7 +107,8 @@ class LuminaireInfo:
     def report(self):
         cells = f" over {len(self.cycles_cells)} near-field cells" if self.cycles_cells else ""
         return (f"Measured luminaire '{self.root.name}': {self.flux_lm:.0f} lm, "
-                f"{len(self.lamps)} EEVEE lamp(s){cells}, intensity error {100 * self.intensity_error:.1f} %, "
+                f"{len(self.lamps)} EEVEE lamp(s){cells}, "
+                f"intensity error {100 * self.intensity_error:.1f} %, "
                 f"illuminance error {100 * self.plane_error:.1f} % on the floor, "
                 f"{100 * self.wall_error:.1f} % on the walls")
 
@@ -133,12 +134,13 @@ def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
     for factor in FACTORS:
         if hasattr(data, factor):
             setattr(data, factor, 0.0)
-    _ies_nodes(data, ies_text)
+    lights.ies_nodes(data, ies_text)
     root = bpy.data.objects.new(name, data)
     root.location = location
     root.rotation_euler = rotation
     collection.objects.link(root)
-    lamps, cycles = _make_all(root, collection, fit.lamps, cells, ies_text, data.shadow_soft_size)
+    lamps, cycles = lights.make_all(root, collection, fit.lamps, cells, ies_text,
+                                    data.shadow_soft_size)
     _store_info(root, table, fit, plane, settings, path.name, cells)
     registry = dict(_registry(scene))
     key = str(1 + max((int(k) for k in registry), default=0))
@@ -156,10 +158,10 @@ def refit(scene, root, settings=FitSettings()):
     table = parse_ies(entry["text"].as_string(), entry["text"].name)
     fit, plane = _fit(table, settings)
     cells = near_field_cells(table.opening_m, settings.near_distance)
-    _delete_lamps(entry["lamps"])
-    _delete_lamps(entry.get("cycles", []))
+    lights.delete_lights(entry["lamps"])
+    lights.delete_lights(entry.get("cycles", []))
     collection = root.users_collection[0] if root.users_collection else scene.collection
-    lamps, cycles = _make_all(root, collection, fit.lamps, cells, entry["text"],
+    lamps, cycles = lights.make_all(root, collection, fit.lamps, cells, entry["text"],
                               root.data.shadow_soft_size)
     _store_info(root, table, fit, plane, settings, root.data[INFO]["source"], cells)
     entry["lamps"] = list(lamps)
@@ -174,8 +176,8 @@ def remove_luminaire(scene, root):
     if key is None:
         raise ValueError(f"'{root.name}' is not a measured luminaire this add-on made")
     entry = scene[REGISTRY][key]
-    _delete_lamps(entry["lamps"])
-    _delete_lamps(entry.get("cycles", []))
+    lights.delete_lights(entry["lamps"])
+    lights.delete_lights(entry.get("cycles", []))
     text = entry["text"]
     data = root.data
     bpy.data.objects.remove(root)
@@ -260,130 +262,6 @@ def _radius(table):
     """Half the luminous opening's largest side (a circle's radius), at most 0.25 m."""
     length, width, _ = table.opening_m
     return float(min(0.5 * max(abs(length), abs(width)), 0.25))
-
-
-def _ies_nodes(data, text):
-    if data.node_tree is None:
-        data.use_nodes = True
-    tree = data.node_tree
-    emission = next(n for n in tree.nodes if n.type == "EMISSION")
-    ies = tree.nodes.new("ShaderNodeTexIES")
-    ies.mode = "INTERNAL"
-    ies.ies = text
-    ies.location = (emission.location.x - 250, emission.location.y)
-    tree.links.new(ies.outputs["Fac"], emission.inputs["Strength"])
-
-
-def _root_emits(data, emits):
-    """Link (far field) or cut (near field: the cells emit) the luminaire's IES node."""
-    tree = data.node_tree
-    emission = next(n for n in tree.nodes if n.type == "EMISSION")
-    strength = emission.inputs["Strength"]
-    for link in list(strength.links):
-        tree.links.remove(link)
-    if emits:
-        ies = next(n for n in tree.nodes if n.type == "TEX_IES")
-        tree.links.new(ies.outputs["Fac"], strength)
-    else:
-        strength.default_value = 0.0
-
-
-def _make_all(root, collection, lamps, cells, text, far_radius):
-    """The EEVEE lamps for every cell, and the near field's Cycles lights (none when far)."""
-    _root_emits(root.data, not cells.near)
-    if not cells.near:
-        return _make_lamps(root, collection, lamps, far_radius, cells), []
-    return (_make_lamps(root, collection, lamps, cells.half_size, cells),
-            _make_cycles_cells(root, collection, text, cells))
-
-
-def _make_cycles_cells(root, collection, text, cells):
-    made = []
-    for index, centre in enumerate(cells.centres):
-        name = f"{root.name} Cycles cell {index + 1}"
-        data = bpy.data.lights.new(name, type="POINT")
-        data.shadow_soft_size = cells.half_size
-        for factor in FACTORS:  # EEVEE: the fitted lamps render
-            if hasattr(data, factor):
-                setattr(data, factor, 0.0)
-        _ies_nodes(data, text)
-        _drive_power_and_colour(data, root, 1.0 / cells.count)
-        made.append(_child(root, collection, name, data, centre))
-    return made
-
-
-def _child(root, collection, name, data, location):
-    obj = bpy.data.objects.new(name, data)
-    obj.parent = root
-    obj.location = tuple(float(v) for v in location)
-    obj.hide_select = True
-    collection.objects.link(obj)
-    return obj
-
-
-def _drive_power_and_colour(data, root, watts_per_watt):
-    _drive(data, "energy", root, "data.energy", f"var * {watts_per_watt!r}")
-    for channel in range(3):
-        _drive(data, "color", root, f"data.color[{channel}]", "var", channel)
-    if hasattr(data, "temperature"):  # Blender 5.0's Light Temperature
-        _drive(data, "use_temperature", root, "data.use_temperature", "var")
-        _drive(data, "temperature", root, "data.temperature", "var")
-
-
-def _make_lamps(root, collection, lamps, radius, cells):
-    made = []
-    for cell, centre in enumerate(cells.centres):
-        for index, lamp in enumerate(lamps):
-            suffix = f" cell {cell + 1}" if cells.near else ""
-            made.append(_make_lamp(root, collection, lamp, radius, f"{index + 1}{suffix}",
-                                   centre, cells.count))
-    return made
-
-
-def _make_lamp(root, collection, lamp, radius, label, centre, count):
-    """One fitted lamp at ``centre`` (the luminaire's axes) with 1 / ``count`` of its power."""
-    name = f"{root.name} EEVEE {label}"
-    data = bpy.data.lights.new(name, type=lamp.kind)
-    data.shadow_soft_size = radius
-    if lamp.kind == "SPOT":
-        data.spot_size = min(2.0 * lamp.half_angle, math.pi)
-        data.spot_blend = lamp.blend
-        data.show_cone = False
-    if data.node_tree is None:
-        data.use_nodes = True
-    emission = next(n for n in data.node_tree.nodes if n.type == "EMISSION")
-    emission.inputs["Strength"].default_value = 0.0  # Cycles: the IES light renders
-    _drive_power_and_colour(data, root, lamp.candela * CANDELA_TO_WATT / count)
-    obj = _child(root, collection, name, data, centre)
-    obj.rotation_mode = "QUATERNION"
-    z = -Vector(lamp.axis)
-    x = Vector(lamp.x_axis) if lamp.x_axis is not None else z.orthogonal().normalized()
-    obj.rotation_quaternion = Matrix((x, z.cross(x), z)).transposed().to_quaternion()
-    obj.scale = (lamp.scale[0], lamp.scale[1], 1.0)
-    return obj
-
-
-def _drive(data, prop, root, path, expression, index=-1):
-    curve = data.driver_add(prop, index)
-    driver = curve.driver
-    driver.type = "SCRIPTED"
-    var = driver.variables.new()
-    var.name = "var"
-    var.type = "SINGLE_PROP"
-    var.targets[0].id_type = "OBJECT"
-    var.targets[0].id = root
-    var.targets[0].data_path = path
-    driver.expression = expression
-
-
-def _delete_lamps(lamps):
-    for lamp in list(lamps):
-        if lamp is None:
-            continue
-        data = lamp.data
-        bpy.data.objects.remove(lamp)
-        if data is not None and data.users == 0:
-            bpy.data.lights.remove(data)
 
 
 TEMPERATURE_RANGE = (800.0, 20000.0)  # kelvin, Blender's Light Temperature's range

@@ -98,3 +98,24 @@ def test_bad_near_distance_creates_nothing():
         build.add_luminaire(bpy.context.scene, FILE, settings=build.FitSettings(
             max_lamps=1, near_distance=float("nan")))
     assert len(bpy.data.objects) == before
+
+
+def test_panel_says_near_or_far(addon):
+    """The panel names the cells, or the distance under which the near field starts."""
+    from types import SimpleNamespace
+
+    from ui_layout import RecordingLayout
+
+    from sh_lighting.blender.ui import luminaire as ui
+
+    scene = bpy.context.scene
+    for settings, expected in ((build.FitSettings(max_lamps=1), "surfaces closer than 5.9"),
+                               (build.FitSettings(max_lamps=1, near_distance=HEIGHT),
+                                "4 x 3 cells for surfaces 0.45 m away")):
+        info = build.add_luminaire(scene, FILE, settings=settings)
+        layout = RecordingLayout()
+        ui.SHLIGHT_PT_luminaire.draw(SimpleNamespace(layout=layout),
+                                     SimpleNamespace(scene=scene, object=info.root))
+        assert any(expected in c[1] for c in layout.of("label")), expected
+        bpy.context.view_layer.objects.active = info.root
+        assert bpy.ops.shlight.remove_luminaire() == {"FINISHED"}
