@@ -108,7 +108,10 @@ def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
     light aimed down its local −Z with Blender's IES node (Cycles, exact) and up to
     ``fit.max_lamps`` fitted spot/point lights as its children (EEVEE). ``power`` 1 W renders
     the file's candela. A bad file raises ``PhotometryError`` (one line naming the line) and
-    creates nothing. Returns a ``LuminaireInfo`` (``.report()``, ``.root``, ``.lamps``)."""
+    creates nothing. ``fit.near_distance`` (metres to the nearest lit surface; 0, the default:
+    far field) below 5 × the luminous opening repeats the lamps over the opening's cells, with
+    one Cycles IES light per cell. Returns a ``LuminaireInfo`` (``.report()``, ``.root``,
+    ``.lamps``, ``.cycles_cells``)."""
     return _luminaire.add_luminaire(scene, path, collection, location, rotation, fit, power)
 
 

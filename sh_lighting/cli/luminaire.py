@@ -37,13 +37,18 @@ def add_arguments(p, prog):
                    help="most EEVEE lamps, 1 to 8 (default 8)")
     p.add_argument("--error-target", type=float, default=3.0, metavar="PERCENT",
                    help="stop adding lamps at this error (default 3)")
+    p.add_argument("--near-distance", type=float, default=0.0, metavar="M",
+                   help="metres to the nearest lit surface: closer than 5 x the luminous "
+                   "opening, the lamps are repeated over its cells (default 0: far field)")
 
 
 def run(args):
-    values = (*args.location, *args.rotation, args.power, args.error_target)
-    if not all(math.isfinite(v) for v in values) or args.power < 0 or args.error_target <= 0:
-        raise CommandError("--location, --rotation, --power and --error-target must be finite "
-                           "numbers (power at least 0, error target above 0)")
+    values = (*args.location, *args.rotation, args.power, args.error_target, args.near_distance)
+    if (not all(math.isfinite(v) for v in values) or args.power < 0 or args.error_target <= 0
+            or args.near_distance < 0):
+        raise CommandError("--location, --rotation, --power, --error-target and --near-distance "
+                           "must be finite numbers (power and distance at least 0, error target "
+                           "above 0)")
     if not 1 <= args.lamps <= 8:
         raise CommandError(f"--lamps {args.lamps}: from 1 to 8")
     if args.temperature is not None and not 800.0 <= args.temperature <= 20000.0:
@@ -72,7 +77,8 @@ def add_and_save(args, source, out):
 
     open_blend(args.blend, load_ui=True)
     scene = pick_scene(args.scene)
-    fit = api.LuminaireFit(args.error_target / 100.0, args.lamps)
+    fit = api.LuminaireFit(args.error_target / 100.0, args.lamps,
+                           near_distance=args.near_distance)
     try:
         info = api.add_luminaire(scene, source, location=tuple(args.location),
                                  rotation=tuple(math.radians(a) for a in args.rotation),

@@ -15,6 +15,14 @@ luminaire's (simple-expression drivers, no scripts), so one Power and one Color 
 so is Blender's Light Temperature where Blender has it (5.0), and ``set_colour_temperature``
 sets either it or, before 5.0, the colour to the blackbody's (``core.blackbody``).
 
+Near field (``core.near_field``): a surface closer than about 5 × the luminous opening
+(``FitSettings.near_distance``, the distance to the nearest lit surface) sees its extent, not
+a point. The opening is then cut into cells (at most 4 × 4) and each cell gets a copy of the
+fitted EEVEE set at its centre, each lamp's power divided by the number of cells, its soft
+shadow radius half the cell's size; Cycles gets one point light per cell with the same IES
+node (the luminaire's own IES link is cut, so that its light is the cells'). Every copy is
+driven by the luminaire's power and colour and listed in ``REGISTRY``.
+
 The luminaire's nine (``luminaire_sh_at``): seen from a point p, it is a source of irradiance
 E₀ = I(−s)/r² from the direction s toward it (r its distance, I in W/sr: the candela × the
 power / 177.83, times its colour), whose radiance terms are L_lm = E₀ Y_lm(s), Blender world
@@ -35,7 +43,7 @@ from pathlib import Path
 
 import bpy
 import numpy as np
-from mathutils import Matrix, Vector
+from mathutils import Vector
 
 from ...core.blackbody import blackbody_rgb
 from ...core.lamp_fit import (
@@ -45,17 +53,21 @@ from ...core.lamp_fit import (
     sphere_samples,
     wall_illuminance_error,
 )
+from ...core.near_field import near_field_cells
 from ...core.polar_plot import polar_curves
 from ...core.sh import sh_basis
 from ...formats.ies import parse_ies
 from ...formats.photometric_file import read_with_ies_text
 from ...formats.photometry import PhotometryError
+from . import lights
 
 __all__ = (
     "FitSettings",
     "LuminaireInfo",
     "PhotometryError",
     "add_luminaire",
+    "cycles_cells_of",
+    "ies_text_of",
     "is_luminaire",
     "lamps_of",
     "luminaire_of",
@@ -66,11 +78,10 @@ __all__ = (
     "set_colour_temperature",
 )
 
-REGISTRY = "sh_lighting_luminaires"  # scene property: {key: {"root", "lamps", "text"}}
+REGISTRY = "sh_lighting_luminaires"  # scene property: {key: {"root", "lamps", "text", "cycles"}}
 INFO = "sh_luminaire"  # the luminaire light's read-only summary (a custom property)
-LUMENS_PER_WATT = 177.83  # Blender's IES node: D65's luminous efficacy
-CANDELA_TO_WATT = 4.0 * math.pi / LUMENS_PER_WATT  # Blender's IES node: Strength per candela
-FACTORS = ("diffuse_factor", "specular_factor", "volume_factor", "transmission_factor")
+LUMENS_PER_WATT = lights.LUMENS_PER_WATT
+FACTORS = lights.FACTORS
 
 
 @dataclass(frozen=True)
@@ -80,6 +91,7 @@ class FitSettings:
     error_target: float = 0.03  # relative RMSE of I over the sphere that ends the search
     max_lamps: int = 8
     check_distance: float = 2.0  # metres: the floor and walls whose illuminance errors are reported
+    near_distance: float = 0.0  # metres to the nearest lit surface; 0: far field (one set)
 
 
 @dataclass(frozen=True)
@@ -90,10 +102,13 @@ class LuminaireInfo:
     plane_error: float  # the floor's (a plane below at the check distance)
     wall_error: float  # the worst wall's (at the check distance)
     flux_lm: float
+    cycles_cells: tuple = ()  # the near field's Cycles lights (none in the far field)
 
     def report(self):
+        cells = f" over {len(self.cycles_cells)} near-field cells" if self.cycles_cells else ""
         return (f"Measured luminaire '{self.root.name}': {self.flux_lm:.0f} lm, "
-                f"{len(self.lamps)} EEVEE lamp(s), intensity error {100 * self.intensity_error:.1f} %, "
+                f"{len(self.lamps)} EEVEE lamp(s){cells}, "
+                f"intensity error {100 * self.intensity_error:.1f} %, "
                 f"illuminance error {100 * self.plane_error:.1f} % on the floor, "
                 f"{100 * self.wall_error:.1f} % on the walls")
 
@@ -108,6 +123,7 @@ def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
     path = Path(path)
     table, text = read_with_ies_text(path)
     fit, plane = _fit(table, settings)
+    cells = near_field_cells(table.opening_m, settings.near_distance)
     collection = collection or scene.collection
     name = path.stem
     ies_text = bpy.data.texts.new(f"{name}.ies")
@@ -118,18 +134,20 @@ def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
     for factor in FACTORS:
         if hasattr(data, factor):
             setattr(data, factor, 0.0)
-    _ies_nodes(data, ies_text)
+    lights.ies_nodes(data, ies_text)
     root = bpy.data.objects.new(name, data)
     root.location = location
     root.rotation_euler = rotation
     collection.objects.link(root)
-    lamps = _make_lamps(root, collection, fit.lamps, data.shadow_soft_size)
-    _store_info(root, table, fit, plane, settings, path.name)
+    lamps, cycles = lights.make_all(root, collection, fit.lamps, cells, ies_text,
+                                    data.shadow_soft_size)
+    _store_info(root, table, fit, plane, settings, path.name, cells)
     registry = dict(_registry(scene))
     key = str(1 + max((int(k) for k in registry), default=0))
-    registry[key] = {"root": root, "lamps": list(lamps), "text": ies_text}
+    registry[key] = {"root": root, "lamps": list(lamps), "text": ies_text, "cycles": list(cycles)}
     scene[REGISTRY] = registry
-    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, *plane, table.flux_lm)
+    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, *plane, table.flux_lm,
+                         tuple(cycles))
 
 
 def refit(scene, root, settings=FitSettings()):
@@ -139,12 +157,17 @@ def refit(scene, root, settings=FitSettings()):
         raise ValueError(f"'{root.name}' is not a measured luminaire this add-on made")
     table = parse_ies(entry["text"].as_string(), entry["text"].name)
     fit, plane = _fit(table, settings)
-    _delete_lamps(entry["lamps"])
+    cells = near_field_cells(table.opening_m, settings.near_distance)
+    lights.delete_lights(entry["lamps"])
+    lights.delete_lights(entry.get("cycles", []))
     collection = root.users_collection[0] if root.users_collection else scene.collection
-    lamps = _make_lamps(root, collection, fit.lamps, root.data.shadow_soft_size)
-    _store_info(root, table, fit, plane, settings, root.data[INFO]["source"])
+    lamps, cycles = lights.make_all(root, collection, fit.lamps, cells, entry["text"],
+                              root.data.shadow_soft_size)
+    _store_info(root, table, fit, plane, settings, root.data[INFO]["source"], cells)
     entry["lamps"] = list(lamps)
-    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, *plane, table.flux_lm)
+    entry["cycles"] = list(cycles)
+    return LuminaireInfo(root, tuple(lamps), fit.intensity_error, *plane, table.flux_lm,
+                         tuple(cycles))
 
 
 def remove_luminaire(scene, root):
@@ -153,7 +176,8 @@ def remove_luminaire(scene, root):
     if key is None:
         raise ValueError(f"'{root.name}' is not a measured luminaire this add-on made")
     entry = scene[REGISTRY][key]
-    _delete_lamps(entry["lamps"])
+    lights.delete_lights(entry["lamps"])
+    lights.delete_lights(entry.get("cycles", []))
     text = entry["text"]
     data = root.data
     bpy.data.objects.remove(root)
@@ -181,14 +205,28 @@ def is_luminaire(scene, obj):
 def luminaire_of(scene, obj):
     """The luminaire ``obj`` is (or is a fitted lamp of), or None."""
     for entry in _registry(scene).values():
-        if entry.get("root") is not None and (entry["root"] == obj or obj in entry["lamps"]):
+        if entry.get("root") is not None and (entry["root"] == obj or obj in entry["lamps"]
+                                              or obj in entry.get("cycles", [])):
             return entry["root"]
     return None
 
 
 def lamps_of(scene, root):
+    """The luminaire's EEVEE lamps (every near-field cell's copy)."""
     entry = _entry(scene, root)
     return [lamp for lamp in entry["lamps"] if lamp is not None] if entry else []
+
+
+def ies_text_of(scene, root):
+    """The luminaire's packed IES text (the Text every IES node of it reads), or None."""
+    entry = _entry(scene, root)
+    return entry["text"] if entry else None
+
+
+def cycles_cells_of(scene, root):
+    """The luminaire's near-field Cycles lights (none in the far field)."""
+    entry = _entry(scene, root)
+    return [light for light in entry.get("cycles", []) if light is not None] if entry else []
 
 
 def _registry(scene):
@@ -211,6 +249,8 @@ def _entry(scene, obj):
 def _fit(table, settings):
     if not 1 <= settings.max_lamps <= 8:
         raise ValueError(f"lamps: {settings.max_lamps} (from 1 to 8)")
+    if not (math.isfinite(settings.near_distance) and settings.near_distance >= 0):
+        raise ValueError(f"near field distance: {settings.near_distance!r} (0 or more metres)")
     fit = fit_lamps(table.intensity_cubic, settings.max_lamps, settings.error_target,
                     room=settings.check_distance)
     plane = (plane_illuminance_error(table.intensity_cubic, fit.lamps, settings.check_distance),
@@ -222,74 +262,6 @@ def _radius(table):
     """Half the luminous opening's largest side (a circle's radius), at most 0.25 m."""
     length, width, _ = table.opening_m
     return float(min(0.5 * max(abs(length), abs(width)), 0.25))
-
-
-def _ies_nodes(data, text):
-    if data.node_tree is None:
-        data.use_nodes = True
-    tree = data.node_tree
-    emission = next(n for n in tree.nodes if n.type == "EMISSION")
-    ies = tree.nodes.new("ShaderNodeTexIES")
-    ies.mode = "INTERNAL"
-    ies.ies = text
-    ies.location = (emission.location.x - 250, emission.location.y)
-    tree.links.new(ies.outputs["Fac"], emission.inputs["Strength"])
-
-
-def _make_lamps(root, collection, lamps, radius):
-    made = []
-    for index, lamp in enumerate(lamps):
-        name = f"{root.name} EEVEE {index + 1}"
-        data = bpy.data.lights.new(name, type=lamp.kind)
-        data.shadow_soft_size = radius
-        if lamp.kind == "SPOT":
-            data.spot_size = min(2.0 * lamp.half_angle, math.pi)
-            data.spot_blend = lamp.blend
-            data.show_cone = False
-        if data.node_tree is None:
-            data.use_nodes = True
-        emission = next(n for n in data.node_tree.nodes if n.type == "EMISSION")
-        emission.inputs["Strength"].default_value = 0.0  # Cycles: the IES light renders
-        _drive(data, "energy", root, "data.energy", f"var * {lamp.candela * CANDELA_TO_WATT!r}")
-        for channel in range(3):
-            _drive(data, "color", root, f"data.color[{channel}]", "var", channel)
-        if hasattr(data, "temperature"):  # Blender 5.0's Light Temperature
-            _drive(data, "use_temperature", root, "data.use_temperature", "var")
-            _drive(data, "temperature", root, "data.temperature", "var")
-        obj = bpy.data.objects.new(name, data)
-        obj.parent = root
-        obj.rotation_mode = "QUATERNION"
-        z = -Vector(lamp.axis)
-        x = Vector(lamp.x_axis) if lamp.x_axis is not None else z.orthogonal().normalized()
-        obj.rotation_quaternion = Matrix((x, z.cross(x), z)).transposed().to_quaternion()
-        obj.scale = (lamp.scale[0], lamp.scale[1], 1.0)
-        obj.hide_select = True
-        collection.objects.link(obj)
-        made.append(obj)
-    return made
-
-
-def _drive(data, prop, root, path, expression, index=-1):
-    curve = data.driver_add(prop, index)
-    driver = curve.driver
-    driver.type = "SCRIPTED"
-    var = driver.variables.new()
-    var.name = "var"
-    var.type = "SINGLE_PROP"
-    var.targets[0].id_type = "OBJECT"
-    var.targets[0].id = root
-    var.targets[0].data_path = path
-    driver.expression = expression
-
-
-def _delete_lamps(lamps):
-    for lamp in list(lamps):
-        if lamp is None:
-            continue
-        data = lamp.data
-        bpy.data.objects.remove(lamp)
-        if data is not None and data.users == 0:
-            bpy.data.lights.remove(data)
 
 
 TEMPERATURE_RANGE = (800.0, 20000.0)  # kelvin, Blender's Light Temperature's range
@@ -341,8 +313,11 @@ def luminaire_sh(table, n_theta=90, n_phi=180):
     return (weights * table.intensity_cubic(dirs)) @ sh_basis(dirs, 2)
 
 
-def _store_info(root, table, fit, plane, settings, source):
+def _store_info(root, table, fit, plane, settings, source, cells):
     root.data[INFO] = {
+        "near_distance": settings.near_distance,
+        "cells": list(cells.counts),
+        "opening_m": [float(v) for v in table.opening_m],
         "source": source,
         "flux_lm": table.flux_lm,
         "peak_cd": table.peak_cd,

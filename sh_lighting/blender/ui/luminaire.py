@@ -26,9 +26,16 @@ class _FitSettingsMixin:
         name="Check Distance", default=2.0, min=0.01, soft_max=20.0, unit="LENGTH",
         description="Distance of the floor and walls around the luminaire whose illuminance error "
         "(EEVEE lamps against the file) the panel shows")
+    near_distance: bpy.props.FloatProperty(
+        name="Near Field Distance", default=0.0, min=0.0, soft_max=10.0, unit="LENGTH",
+        description="Distance from the luminaire to the nearest surface it lights. Closer than "
+        "5 times the luminous opening, the opening is split into cells (at most 4 x 4), each "
+        "with its own copy of the lamps (more EEVEE lamps, more shadow maps). 0: far field, "
+        "one set")
 
     def fit_settings(self):
-        return build.FitSettings(self.error_target / 100.0, self.max_lamps, self.check_distance)
+        return build.FitSettings(self.error_target / 100.0, self.max_lamps, self.check_distance,
+                                 self.near_distance)
 
 
 class SHLIGHT_OT_add_luminaire(bpy.types.Operator, ImportHelper, _FitSettingsMixin):
@@ -87,6 +94,7 @@ class SHLIGHT_OT_refit_luminaire(bpy.types.Operator, _FitSettingsMixin):
         self.error_target = 100.0 * info.get("error_target", 0.03)
         self.max_lamps = info.get("max_lamps", 8)
         self.check_distance = info.get("check_distance", 2.0)
+        self.near_distance = info.get("near_distance", 0.0)
         return context.window_manager.invoke_props_dialog(self)
 
     def execute(self, context):
@@ -168,6 +176,18 @@ def draw_nine(layout, context, root):
         split.label(text=" ".join(f"{v:.3g}" for v in own[index]))
 
 
+def draw_near_field(layout, info):
+    """The near field's cells, or the distance under which it would start."""
+    cells = info.get("cells", (1, 1))
+    size = max((abs(v) for v in info.get("opening_m", (0.0, 0.0))[:2]), default=0.0)
+    if cells[0] * cells[1] > 1:
+        layout.label(text=f"Near field: {cells[0]} x {cells[1]} cells for surfaces "
+                          f"{info.get('near_distance', 0):.2f} m away, each lamp copied per cell")
+    elif size > 0:
+        layout.label(text=f"Far field: surfaces closer than {5 * size:.2f} m (5 x its "
+                          f"{size:.2f} m opening) need Near Field Distance (Refit)")
+
+
 class SHLIGHT_PT_luminaire(bpy.types.Panel):
     """The luminaire's file, flux, fit errors and SH coefficients (Light properties)."""
 
@@ -201,6 +221,7 @@ class SHLIGHT_PT_luminaire(bpy.types.Panel):
             row.operator(SHLIGHT_OT_luminaire_temperature.bl_idname, icon="LIGHT_SUN")
         box = layout.box()
         box.label(text=f"EEVEE: {info.get('lamps', 0)} lamp(s), Cycles: the IES node (exact)")
+        draw_near_field(box, info)
         box.label(text=f"Intensity error {100 * info.get('intensity_error', 0):.1f} % "
                        "(relative RMS over the sphere)")
         distance = info.get("check_distance", 0)
