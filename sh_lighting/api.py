@@ -94,6 +94,7 @@ __all__ = [
     "coefficients_from_photo", "photo_exposure", "SecondPhoto", "detect_photo_ball",
     # measured luminaires (IES, EULUMDAT)
     "PhotometryError", "LuminaireFit", "add_luminaire", "refit_luminaire", "remove_luminaire",
+    "luminaire_lit_distance",
     "set_luminaire_temperature", "luminaire_sh_at",
 ]
 
@@ -118,6 +119,12 @@ def add_luminaire(scene, path, collection=None, location=(0.0, 0.0, 3.0),
 def refit_luminaire(scene, root, fit=LuminaireFit()):
     """Fit the EEVEE lamps of the luminaire ``root`` again with other ``fit`` settings."""
     return _luminaire.refit(scene, root, fit)
+
+
+def luminaire_lit_distance(scene, root):
+    """Metres from the luminaire ``root`` along its axis to the first surface it meets, or
+    None: a ``fit.near_distance`` read from the scene (``refit_luminaire`` with it)."""
+    return _luminaire.lit_distance(scene, root)
 
 
 def set_luminaire_temperature(root, kelvin):

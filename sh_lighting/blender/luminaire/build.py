@@ -170,6 +170,25 @@ def refit(scene, root, settings=FitSettings()):
                          tuple(cycles))
 
 
+def lit_distance(scene, root, depsgraph=None, reach=1000.0):
+    """Metres from the luminaire ``root`` along its axis (local −Z) to the first surface of
+    ``scene`` a ray meets (its evaluated geometry), or None within ``reach``: the distance the
+    near field's five-times rule is read at."""
+    depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
+    matrix = root.matrix_world
+    origin = matrix.translation
+    axis = (matrix.to_3x3() @ Vector((0.0, 0.0, -1.0))).normalized()
+    hit, location, *_ = scene.ray_cast(depsgraph, origin, axis, distance=reach)
+    return (location - origin).length if hit else None
+
+
+def settings_of(root):
+    """The ``FitSettings`` the luminaire ``root`` was last fitted with."""
+    info = root.data.get(INFO, {})
+    return FitSettings(info.get("error_target", 0.03), info.get("max_lamps", 8),
+                       info.get("check_distance", 2.0), info.get("near_distance", 0.0))
+
+
 def remove_luminaire(scene, root):
     """Delete the luminaire ``root`` made by the add-on: its lamps, light data and text."""
     key = _key(scene, root)

@@ -1,5 +1,7 @@
 """Measured luminaires in the UI: Add > Light > Measured Luminaire, refit, remove, the panel."""
 
+import dataclasses
+
 import bpy
 from bpy_extras.io_utils import ImportHelper
 
@@ -107,6 +109,37 @@ class SHLIGHT_OT_refit_luminaire(bpy.types.Operator, _FitSettingsMixin):
         return {"FINISHED"}
 
 
+class SHLIGHT_OT_luminaire_near_from_scene(bpy.types.Operator):
+    """Set Near Field Distance to the distance from the luminaire, along its axis, to the first
+    surface below it, and fit again (the near field's cells if that surface is close)"""
+
+    bl_idname = "shlight.luminaire_near_from_scene"
+    bl_label = "Near Field from Scene"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return _luminaire_poll(cls, context)
+
+    def execute(self, context):
+        root = context.object
+        distance = build.lit_distance(context.scene, root)
+        if distance is None:
+            self.report({"WARNING"}, f"No surface along '{root.name}''s axis: it keeps its "
+                                     "Near Field Distance")
+            return {"CANCELLED"}
+        settings = build.settings_of(root)
+        try:
+            info = build.refit(context.scene, root, dataclasses.replace(
+                settings, near_distance=round(distance, 3)))
+        except ValueError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Near Field Distance {distance:.3f} m (the surface along the "
+                              f"axis); {info.report()}")
+        return {"FINISHED"}
+
+
 class SHLIGHT_OT_remove_luminaire(bpy.types.Operator):
     """Delete this measured luminaire: its light, EEVEE lamps and packed IES text (copies
     you made are kept)"""
@@ -185,7 +218,8 @@ def draw_near_field(layout, info):
                           f"{info.get('near_distance', 0):.2f} m away, each lamp copied per cell")
     elif size > 0:
         layout.label(text=f"Far field: surfaces closer than {5 * size:.2f} m (5 x its "
-                          f"{size:.2f} m opening) need Near Field Distance (Refit)")
+                          f"{size:.2f} m opening) need Near Field Distance (Refit, or Near "
+                          "Field from Scene)")
 
 
 class SHLIGHT_PT_luminaire(bpy.types.Panel):
@@ -222,6 +256,7 @@ class SHLIGHT_PT_luminaire(bpy.types.Panel):
         box = layout.box()
         box.label(text=f"EEVEE: {info.get('lamps', 0)} lamp(s), Cycles: the IES node (exact)")
         draw_near_field(box, info)
+        box.operator(SHLIGHT_OT_luminaire_near_from_scene.bl_idname, icon="DRIVER_DISTANCE")
         box.label(text=f"Intensity error {100 * info.get('intensity_error', 0):.1f} % "
                        "(relative RMS over the sphere)")
         distance = info.get("check_distance", 0)
@@ -247,7 +282,8 @@ def draw_add_menu(self, context):
     self.layout.operator(SHLIGHT_OT_add_luminaire.bl_idname, icon="LIGHT_SPOT")
 
 
-classes = (SHLIGHT_OT_add_luminaire, SHLIGHT_OT_refit_luminaire, SHLIGHT_OT_remove_luminaire,
+classes = (SHLIGHT_OT_add_luminaire, SHLIGHT_OT_refit_luminaire,
+           SHLIGHT_OT_luminaire_near_from_scene, SHLIGHT_OT_remove_luminaire,
            SHLIGHT_OT_luminaire_temperature, SHLIGHT_PT_luminaire)
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(classes)
 

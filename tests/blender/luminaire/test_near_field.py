@@ -119,3 +119,23 @@ def test_panel_says_near_or_far(addon):
         assert any(expected in c[1] for c in layout.of("label")), expected
         bpy.context.view_layer.objects.active = info.root
         assert bpy.ops.shlight.remove_luminaire() == {"FINISHED"}
+
+
+def test_near_field_from_scene_reads_the_surface_along_the_axis(addon):
+    """Near Field from Scene: a floor 0.45 m below the luminaire gives that distance and the
+    near field's cells; nothing below keeps the setting, with one warning."""
+    scene = bpy.context.scene
+    info = build.add_luminaire(scene, FILE, location=(0.0, 0.0, 3.0),
+                               settings=build.FitSettings(max_lamps=1))
+    bpy.context.view_layer.objects.active = info.root
+    assert build.lit_distance(scene, info.root) is None
+    assert bpy.ops.shlight.luminaire_near_from_scene() == {"CANCELLED"}  # warned, unchanged
+    assert info.root.data[build.INFO]["near_distance"] == 0.0
+    bpy.ops.mesh.primitive_plane_add(size=20.0, location=(0.0, 0.0, 3.0 - HEIGHT))
+    bpy.context.view_layer.objects.active = info.root
+    assert build.lit_distance(scene, info.root) == pytest.approx(HEIGHT, abs=1e-5)
+    assert bpy.ops.shlight.luminaire_near_from_scene() == {"FINISHED"}
+    stored = info.root.data[build.INFO]
+    assert stored["near_distance"] == pytest.approx(HEIGHT, abs=1e-3)
+    assert tuple(stored["cells"]) == (4, 3) and stored["max_lamps"] == 1
+    assert len(build.lamps_of(scene, info.root)) == 12
