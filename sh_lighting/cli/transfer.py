@@ -74,7 +74,7 @@ def run(args):
     say(f"Baked the transfer of {len(info.objects)} object(s) ({', '.join(info.objects)}): "
         f"{info.vertices} vertices, {info.texels} texels, {info.samples} samples, "
         f"{info.seconds:.1f} s "
-        f"({per_10k:.1f} s per 10k vertices)")
+        f"({per_10k:.1f} s per 10k vertices){info.texel_rate()}")
     for note in info.notes:
         say(f"note: {note}")
     if args.apply:

@@ -68,6 +68,14 @@ class BakeInfo(NamedTuple):
     notes: list  # what the user should know about the result (one line each)
     texel_objects: list = []  # names of the objects baked per texel
     texels: int = 0  # texels baked (inside the atlas's charts)
+    texel_seconds: float = 0.0  # of ``seconds``, Cycles' bakes of the texels
+
+    def texel_rate(self):
+        """", per texel: X s (Y s per million texels)" for a report, or "" if none."""
+        if not self.texels:
+            return ""
+        return (f", per texel {self.texel_seconds:.1f} s "
+                f"({self.texel_seconds / self.texels * 1e6:.0f} s per million texels)")
 
 
 def _render_modifiers(obj):
@@ -301,6 +309,7 @@ class Bake:
         self.samples = samples
         self.scene_print = scene_fingerprint(scene)
         self.bakes, self.basis_seconds = [], []
+        self.texel_seconds = 0.0
         self.emission_materials = set()
 
     @property
@@ -316,6 +325,7 @@ class Bake:
             saved.prepare(self.samples)
             self.emission_materials |= saved.emission_materials
             self.bakes.append(_bake_basis(self.scene, saved, self.split, index))
+            self.texel_seconds += saved.texel_seconds
         finally:
             saved.restore()
         self.basis_seconds.append(time.perf_counter() - began)
@@ -380,7 +390,7 @@ class Bake:
             nodes.ensure_node_group()  # the group reads the atlas only where there is one
         return BakeInfo([o.name for o in picked], corners, vertices, self.samples, seconds,
                         self.basis_seconds, notes, [o.name for o in split.texel_objects],
-                        split.atlas.covered if split.atlas else 0)
+                        split.atlas.covered if split.atlas else 0, self.texel_seconds)
 
 
 def choose_samples(scene, objects, error_target, probe=16, store="AUTO"):
@@ -473,9 +483,11 @@ def _bake_basis(scene, saved, split, index):
         if split.corner_objects:
             _cycles_bake(scene, saved, split.corner_objects, index, target="VERTEX_COLORS")
         if split.texel_objects:
+            began = time.perf_counter()
             _cycles_bake(scene, saved, split.texel_objects, index, target="IMAGE_TEXTURES",
                          uv_layer=SCRATCH_UV, margin=texels.MARGIN, margin_type="EXTEND",
                          use_clear=False)
+            saved.texel_seconds += time.perf_counter() - began
     finally:
         scene.world = saved.world
         bpy.data.worlds.remove(world)
@@ -525,6 +537,7 @@ class _Saved:
         self.picked = picked
         self.split = split
         self.target = None  # the texels' ``texels.BakeTarget`` while prepared
+        self.texel_seconds = 0.0  # Cycles' image bakes of the texel objects
         self.view_layer = view_layer_of(scene)
         self.world = scene.world
         self.render = {"engine": scene.render.engine}

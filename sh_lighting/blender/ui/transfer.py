@@ -182,7 +182,7 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
             f"Baked the transfer of {len(info.objects)} object(s): {info.vertices} vertices, "
             f"{info.corners} corners, {info.texels} texels, {info.samples} samples, "
             f"{info.seconds:.1f} s "
-            f"({per_10k:.1f} s per 10k vertices)"))
+            f"({per_10k:.1f} s per 10k vertices){info.texel_rate()}"))
         for reason in self._skipped:
             self.report({"WARNING"}, f"Not baked: {reason}")
         for note in info.notes:

@@ -52,6 +52,7 @@ def test_a_plain_floor_gets_its_contact_shadow_per_texel(tmp_path):
         errors[store] = (ts.relative_rmse(image, reference, contact),
                          ts.relative_rmse(image, reference, everything))
     assert info.texel_objects == ["Ground"] and info.texels > 0
+    assert 0.0 < info.texel_seconds < info.seconds
     assert bake.record(ground)["store"] == "TEXELS" and bake.record(box)["store"] == "CORNERS"
     texel, corner = errors["AUTO"], errors["CORNERS"]
     assert texel[0] < CONTACT_TOLERANCE and texel[1] < ERROR_TOLERANCE, errors
