@@ -19,7 +19,8 @@ HEIGHT = 2.0
 SIZE = 48
 
 
-def scene_with_floor_and_wall(size=SIZE):
+def direct_light_scene(size=SIZE):
+    """(scene, a white Diffuse material): black world, direct light only, ``size`` px."""
     scene = bpy.context.scene
     black_world(scene)
     setup_render(scene, size=size)
@@ -33,6 +34,11 @@ def scene_with_floor_and_wall(size=SIZE):
     diffuse.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
     out = tree.nodes.new("ShaderNodeOutputMaterial")
     tree.links.new(diffuse.outputs[0], out.inputs["Surface"])
+    return scene, material
+
+
+def scene_with_floor_and_wall(size=SIZE):
+    scene, material = direct_light_scene(size)
     h = HEIGHT
     _quad(scene, "Floor", [(-2 * h, -2 * h, 0), (h, -2 * h, 0), (h, 2 * h, 0),
                            (-2 * h, 2 * h, 0)], material)  # up to the wall

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import bpy
 import numpy as np
-from blender_scenes import black_world, read_exr, setup_render
+from blender_scenes import read_exr
+from luminaire_scenes import direct_light_scene
 
-from sh_lighting.blender.data import compat
 from sh_lighting.blender.luminaire import build
 
 FILE = Path(__file__).resolve().parent / "data" / "photometry" / "prolicht_e30_0019.ldt"
@@ -29,19 +29,7 @@ GRID = (16, 4)  # the reference's lights along the opening's length (local Y) an
 
 
 def floor_scene(size=SIZE):
-    scene = bpy.context.scene
-    black_world(scene)
-    setup_render(scene, size=size)
-    scene.render.film_transparent = False
-    scene.cycles.max_bounces = 0
-    scene.view_layers[0].use_pass_normal = False
-    material = bpy.data.materials.new("White")
-    tree = compat.ensure_node_tree(material)
-    tree.nodes.clear()
-    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    tree.links.new(diffuse.outputs[0], out.inputs["Surface"])
+    scene, material = direct_light_scene(size)
     mesh = bpy.data.meshes.new("Floor")
     mesh.from_pydata([(-5, -5, 0), (5, -5, 0), (5, 5, 0), (-5, 5, 0)], [], [(0, 1, 2, 3)])
     mesh.materials.append(material)
