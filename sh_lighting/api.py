@@ -42,6 +42,7 @@ from .blender.shading import materials as _materials
 from .blender.shading import nodes as _nodes
 from .blender.transfer import apply as _transfer_apply
 from .blender.transfer import bake as _transfer
+from .blender.transfer import on_apply as _on_apply
 from .blender.design import compute as _design_compute
 from .blender.world import reader as _world
 from .blender import world_edit as _world_edit
@@ -89,7 +90,7 @@ __all__ = [
     "hdri_lights", "hdri_metadata", "read_hdri",
     # precomputed radiance transfer (shadows and bounce light)
     "TransferError", "bake_transfer", "transfer_refusal", "transfer_status", "apply_transfer",
-    "delete_transfer",
+    "delete_transfer", "apply_with_shadows",
     # lighting from a photo of a grey ball
     "coefficients_from_photo", "photo_exposure", "SecondPhoto", "detect_photo_ball",
     # measured luminaires (IES, EULUMDAT)
@@ -178,6 +179,19 @@ def apply_transfer(objects, scene=None, mode="KEEP_BSDF"):
     "KEEP_BSDF" or "EMISSION", as ``apply_to_materials``); returns (changed, skipped).
     ``remove_from_materials`` takes it out again."""
     return _transfer_apply.apply_transfer(objects, scene or bpy.context.scene, mode)
+
+
+def apply_with_shadows(scene, objects=None, mode="TRANSFER", report=print):
+    """Apply's "Keep BSDF with Shadows" (EEVEE's Default): bake the transfer of ``objects``
+    (default: the scene's) where it is missing or stale, then Keep BSDF on every material of
+    the scene, the baked objects' through the transfer. ``mode`` "AUTO" bakes only when
+    estimated at most ``AFFORDABLE_SECONDS``. Returns (result, lit, info, notes); a
+    TransferError from the bake changes nothing."""
+    objects = list(scene.objects) if objects is None else list(objects)
+    return _on_apply.bake_and_apply(scene, objects, mode, report)
+
+
+AFFORDABLE_SECONDS = _on_apply.AFFORDABLE_SECONDS
 
 
 def delete_transfer(obj):

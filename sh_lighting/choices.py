@@ -40,20 +40,25 @@ FILAMENT_FRAMES = {
     "gltf": "a glTF export of the Blender scene",
 }
 # What Apply does (blender.ui.operators); the first is the default: "AUTO" resolves per render
-# engine at Apply time (``resolve_mode``): Edit World in Cycles, Keep BSDF in EEVEE (measured:
-# benchmarks/bench_eevee_default.py, World Edit there is EEVEE's own world lighting, the less
-# accurate on two HDRIs of three)
-APPLY_MODES = ("AUTO", "WORLD", "KEEP_BSDF", "EMISSION")
+# engine at Apply time (``resolve_mode``): Edit World in Cycles, Keep BSDF with Shadows in EEVEE
+# (measured: benchmarks/bench_eevee_default.py and bench_texel.py; the transfer is EEVEE's most
+# accurate on every HDRI measured, its own world lighting the least on two of three)
+APPLY_MODES = ("AUTO", "WORLD", "TRANSFER", "KEEP_BSDF", "EMISSION")
+# The number a .blend file stores for each mode (the settings' enum): never renumbered
+APPLY_MODE_VALUES = {"AUTO": 0, "WORLD": 1, "KEEP_BSDF": 2, "EMISSION": 3, "TRANSFER": 4}
 # The modes that change materials (blender.shading.materials; the command line's --mode)
 MATERIAL_MODES = ("KEEP_BSDF", "EMISSION")
 # (id, name, description) of each Apply mode, for the Mode menus
 APPLY_MODE_ITEMS = (
     ("AUTO", "Default",
      "Edit World in Cycles (path-traced shadows, bounces and reflections of the edited "
-     "world), Keep BSDF in EEVEE"),
+     "world), Keep BSDF with Shadows in EEVEE (the bake started when it takes seconds)"),
     ("WORLD", "Edit World",
      "Add the designed change to the world itself; the materials stay as they are (Cycles: "
      "every shadow, bounce and reflection)"),
+    ("TRANSFER", "Keep BSDF with Shadows",
+     "Bake the transfer (the scene's shadows and bounce light, by Cycles) where it is missing "
+     "or stale, then Keep BSDF with it (EEVEE's contact shadows)"),
     ("KEEP_BSDF", "Keep BSDF",
      "Keep the material's BSDF (lamps, shadows, reflections); SH replaces the world's diffuse "
      "light (Cycles)"),
@@ -62,7 +67,7 @@ APPLY_MODE_ITEMS = (
      "reflections"),
 )
 # What "AUTO" is in each render engine (any other engine: Keep BSDF)
-AUTO_MODES = {"CYCLES": "WORLD"}
+AUTO_MODES = {"CYCLES": "WORLD", "BLENDER_EEVEE": "TRANSFER", "BLENDER_EEVEE_NEXT": "TRANSFER"}
 
 
 def resolve_mode(mode, engine):

@@ -6,10 +6,12 @@ the passes of a multilayer file) and compares each covered pixel with the core's
 ``irradiance(coeffs, normal) / π`` at that pixel's normal.
 """
 
+import inspect
 import math
 import struct
 import subprocess
 import sys
+import types
 from math import pi
 from pathlib import Path
 
@@ -252,10 +254,23 @@ class Recorder:
         self.reports.append((set(kind), message))
 
 
-def run_execute(cls, **props):
-    """``cls.execute`` on a ``Recorder`` with ``props``: (result, [(kinds, message)])."""
+def bound(cls, **props):
+    """A ``Recorder`` with ``props`` standing in for an instance of the operator ``cls``: its
+    own methods and text attributes (and its mixins') bound to it."""
     recorder = Recorder(**props)
-    if hasattr(cls, "apply"):  # design operators split execute, apply and message
-        recorder.apply = lambda scene: cls.apply(recorder, scene)
-        recorder.message = lambda result: cls.message(recorder, result)
+    for klass in reversed(cls.__mro__):
+        if klass.__module__.startswith("sh_lighting"):
+            for name, value in vars(klass).items():
+                if name in props or name.startswith("__"):
+                    continue
+                if inspect.isfunction(value):
+                    setattr(recorder, name, types.MethodType(value, recorder))
+                elif isinstance(value, str):
+                    setattr(recorder, name, value)
+    return recorder
+
+
+def run_execute(cls, **props):
+    """``cls.execute`` on ``bound(cls, **props)``: (result, [(kinds, message)])."""
+    recorder = bound(cls, **props)
     return cls.execute(recorder, bpy.context), recorder.reports

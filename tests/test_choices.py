@@ -1,5 +1,6 @@
 """The Apply modes' Default by render engine (``choices.resolve_mode``), as measured:
-Edit World in Cycles, Keep BSDF in EEVEE (benchmarks/bench_eevee_default.py) and elsewhere."""
+Edit World in Cycles, Keep BSDF with Shadows in EEVEE (benchmarks/bench_eevee_default.py,
+bench_texel.py), Keep BSDF elsewhere."""
 
 import pytest
 
@@ -8,8 +9,8 @@ from sh_lighting.choices import APPLY_MODES, resolve_mode
 
 @pytest.mark.parametrize("engine, mode", [
     ("CYCLES", "WORLD"),
-    ("BLENDER_EEVEE", "KEEP_BSDF"),  # 5.0
-    ("BLENDER_EEVEE_NEXT", "KEEP_BSDF"),  # 4.2-4.5
+    ("BLENDER_EEVEE", "TRANSFER"),  # 5.0
+    ("BLENDER_EEVEE_NEXT", "TRANSFER"),  # 4.2-4.5
     ("BLENDER_WORKBENCH", "KEEP_BSDF"),
 ])
 def test_the_default_by_engine(engine, mode):

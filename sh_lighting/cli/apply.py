@@ -15,9 +15,11 @@ def add_arguments(p, prog):
     p.description = (
         "Set the scene's coefficients from PRESET and apply them as the panel's Apply does: "
         "by default (--mode AUTO) Edit World in Cycles (the designed change added to the "
-        "world; the materials untouched) and the SH Irradiance node group on the materials of "
-        "all objects of the scene (or of --objects) in EEVEE (Keep BSDF); then save to --out "
-        "(a new file) or over the input with --in-place.")
+        "world; the materials untouched) and in EEVEE Keep BSDF with Shadows: the transfer "
+        "(shadows) baked by Cycles where the file holds no current bake and it is estimated "
+        "under 30 s, then the SH node group on the materials of all objects of the scene "
+        "(or of --objects), through the transfer where baked; then save to --out (a new file) "
+        "or over the input with --in-place.")
     p.epilog = f"example:\n  {prog} apply forest.json shot.blend --out shot_sh.blend"
     p.add_argument("preset", metavar="PRESET", help="SH Lighting preset (.json)")
     p.add_argument("blend", metavar="BLEND", nargs="?",
@@ -78,6 +80,8 @@ def apply_and_save(args, preset, out):
             f"{scene.render.engine})")
     if mode == "WORLD":
         edit_world(scene)
+    elif mode == "TRANSFER":
+        apply_with_shadows(scene, objects, args.mode)
     else:
         apply_to_materials(scene, objects, mode)
     save_and_say(args, out)
@@ -100,6 +104,40 @@ def edit_world(scene):
         say(f"SH lighting taken out of {len(taken)} material(s): the edited world lights them")
     if clamped:
         say(f"warning: {clamped}")
+
+
+def apply_with_shadows(scene, objects, asked):
+    """Keep BSDF with Shadows: the transfer baked where missing or stale (the Default only
+    when affordable), then Keep BSDF with it, as the panel's Apply does."""
+    from .. import api
+    from . import interrupts
+
+    try:
+        with interrupts.at_once():  # Cycles' bake would swallow a KeyboardInterrupt
+            result, lit, info, notes = api.apply_with_shadows(scene, objects, asked, report=say)
+    except api.TransferError as error:
+        raise CommandError(f"{error}; nothing saved") from None
+    except (LookupError, ValueError) as error:
+        raise CommandError(str(error)) from None
+    if info is not None:
+        say(f"Baked the transfer of {len(info.objects)} object(s): {info.vertices} vertices, "
+            f"{info.corners} corners, {info.texels} texels, {info.samples} samples, "
+            f"{info.seconds:.1f} s{info.rates()}")
+    for line in notes:
+        say(f"note: {line}")
+    for name, reason in result.skipped:
+        say(f"skipped material '{name}': {reason}")
+    for name in api.objects_without_material(objects):
+        say(f"skipped object '{name}': it has no material (give it one to light it)")
+    if not result.changed:
+        raise CommandError(f"no material was changed ({len(result.skipped)} skipped): nothing "
+                           "saved")
+    if api.remove_world_edit(scene):
+        say(f"World Edit taken out of world '{scene.world.name}': the materials light it now")
+    say(f"SH lighting applied to {len(result.changed)} material(s), {len(lit)} with the "
+        "transfer's shadows: " + ", ".join(result.changed))
+    for line in api.shared_scene_notes(scene, result.changed):
+        say(f"warning: {line}")
 
 
 def apply_to_materials(scene, objects, mode):

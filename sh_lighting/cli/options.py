@@ -74,8 +74,10 @@ def add_apply_mode(parser):
     parser.add_argument(
         "--mode", choices=APPLY_MODES, default=APPLY_MODES[0],
         help="AUTO (default): as the panel's Default, by the scene's render engine: WORLD in "
-        "Cycles, KEEP_BSDF in EEVEE; WORLD (Edit World): the designed change is added to the "
-        "world itself, the materials stay as they are (path-traced shadows, bounces and "
-        "reflections); KEEP_BSDF: materials keep their BSDF (lamps, shadows, reflections) and "
+        "Cycles, TRANSFER in EEVEE (its bake only when estimated under 30 s); WORLD (Edit "
+        "World): the designed change is added to the world itself, the materials stay as they "
+        "are (path-traced shadows, bounces and reflections); TRANSFER (Keep BSDF with "
+        "Shadows): the transfer baked by Cycles where missing or stale, then KEEP_BSDF with "
+        "it; KEEP_BSDF: materials keep their BSDF (lamps, shadows, reflections) and "
         "SH replaces the world's diffuse light; EMISSION: the SH emission alone drives the "
         "surface")

@@ -70,11 +70,9 @@ def run(args):
                                      error_target=target, store=args.store.upper())
     except api.TransferError as error:
         raise CommandError(f"{error}; nothing saved") from None
-    per_10k = info.seconds / max(info.vertices, 1) * 1e4
     say(f"Baked the transfer of {len(info.objects)} object(s) ({', '.join(info.objects)}): "
-        f"{info.vertices} vertices, {info.texels} texels, {info.samples} samples, "
-        f"{info.seconds:.1f} s "
-        f"({per_10k:.1f} s per 10k vertices){info.texel_rate()}")
+        f"{info.vertices} vertices, {info.corners} corners, {info.texels} texels, "
+        f"{info.samples} samples, {info.seconds:.1f} s{info.rates()}")
     for note in info.notes:
         say(f"note: {note}")
     if args.apply:

@@ -1,7 +1,7 @@
 """``apply --mode``: the panel's modes and default, through the command in a fresh process.
 
-The default ("AUTO") is Edit World in Cycles and Keep BSDF in EEVEE, by the scene's render
-engine, as Apply in the panel. The preset is a constant sky of its own colour (not the
+The default ("AUTO") is Edit World in Cycles and Keep BSDF with Shadows in EEVEE (the transfer
+baked first), by the scene's render engine, as Apply in the panel. The preset is a constant sky of its own colour (not the
 world's), so the edited world shows that colour around the sphere: the nine terms replace a
 world without coefficients of its own.
 """
@@ -17,6 +17,8 @@ from numpy.testing import assert_allclose
 from sh_lighting.blender import world_edit
 from sh_lighting.blender.data import compat
 from sh_lighting.blender.shading import materials
+from sh_lighting.blender.transfer import apply as transfer_apply
+from sh_lighting.blender.transfer import bake
 from sh_lighting.choices import APPLY_MODES, resolve_mode
 from sh_lighting.formats.presets import write_preset
 
@@ -83,18 +85,24 @@ def test_default_in_cycles_edits_the_world_and_renders_the_preset(inputs, tmp_pa
     assert_allclose(corner, SKY, rtol=1e-4)  # the world is the preset's sky now
 
 
-def test_default_in_eevee_keeps_the_bsdf(inputs, tmp_path):
+def test_default_in_eevee_bakes_the_shadows_and_keeps_the_bsdf(inputs, tmp_path):
     blend = _variant(inputs["blend"], tmp_path / "eevee.blend",
                      lambda scene: setattr(scene.render, "engine", compat.eevee_engine_id()))
     out = tmp_path / "eevee_sh.blend"
     result = run("apply", inputs["preset"], blend, "--out", out)
     assert result.returncode == 0, result.stderr
-    expected = resolve_mode("AUTO", compat.eevee_engine_id())
-    assert expected == "KEEP_BSDF"
-    assert "Keep BSDF" in result.stdout and "applied to 1 material(s): Grey" in result.stdout
+    assert resolve_mode("AUTO", compat.eevee_engine_id()) == "TRANSFER"
+    assert "Keep BSDF with Shadows" in result.stdout
+    assert "Baked the transfer of 1 object(s)" in result.stdout
+    assert "applied to 1 material(s), 1 with the transfer's shadows: Grey" in result.stdout
     scene, grey = _opened(out)
-    assert materials.mode_of(grey) == "KEEP_BSDF"
+    assert materials.mode_of(grey) == "KEEP_BSDF" and transfer_apply.uses_transfer(grey)
+    assert bake.status(scene, scene.objects["Ball"])[0] == "OK"
     assert not world_edit.is_edited(scene.world)
+    # Applied again with the bake current: nothing baked, the transfer kept
+    again = run("apply", inputs["preset"], out, "--out", tmp_path / "again.blend")
+    assert again.returncode == 0, again.stderr
+    assert "Baked" not in again.stdout and "1 with the transfer's shadows" in again.stdout
 
 
 def test_edit_world_takes_the_sh_out_of_the_materials(inputs, tmp_path):

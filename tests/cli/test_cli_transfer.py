@@ -135,7 +135,7 @@ def test_bake_transfer_per_texel_saves_the_atlas_in_the_file(tmp_path):
                for line in lines), lines
     assert not any("Baking map saved" in line for line in lines), lines  # Cycles' chatter
     baked = [line for line in lines if line.startswith("Baked the transfer of 2 object(s)")]
-    assert len(baked) == 1 and " s per million texels)" in baked[0], lines
+    assert len(baked) == 1 and " s per million texels" in baked[0], lines
     bpy.ops.wm.open_mainfile(filepath=str(out))
     scene = bpy.context.scene
     for name in ("Ground", "Box"):

@@ -40,6 +40,7 @@ MATCH_FRACTION = 0.99
 CYCLES_MATCH_FRACTION = 0.9
 MEAN_TOLERANCE = 1.0
 MATCH_TIMEOUT = float(os.environ.get("SH_GUI_MATCH_TIMEOUT", "40"))
+BAKE_TIMEOUT = 300.0  # s: the Default's bake of the cube and Suzanne (seconds when idle)
 WORLD_LIT_TOLERANCE = 8.0
 GRID = 3  # sample every GRID pixels
 
@@ -414,7 +415,7 @@ def set_apply_mode(mode):
 
 def click_apply():
     """A generator step: a click on Apply, recording the mode it applies: the Default is Edit
-    World in Cycles and Keep BSDF in EEVEE (docs/blender.md, "Modes")."""
+    World in Cycles and Keep BSDF (with Shadows) in EEVEE (docs/blender.md, "Modes")."""
     yield from click(sidebar_point(*TARGETS["apply"]))
     mode, engine = state["mode"], S().render.engine
     if mode == "AUTO":
@@ -676,15 +677,17 @@ def session():
           frame=S().frame_current, first=first, at_frame=value)
     yield from viewport_follows("Frame 6 between keyframes: viewport follows")
 
-    # Rendered, in the default Apply mode: a click on Apply with it, in EEVEE, then in Cycles;
-    # Remove and Apply again must reach the open Cycles viewport.
-    set_apply_mode(default_apply_mode())
+    # Rendered, Keep BSDF: a click on Apply with it, in EEVEE, then in Cycles (the SH term
+    # alone predicts every pixel); Remove and Apply in the default mode (Edit World in Cycles)
+    # must reach the open Cycles viewport.
+    set_apply_mode("KEEP_BSDF")
     yield from click_apply()
+    set_apply_mode(default_apply_mode())
     yield from settle()
     v3d.spaces.active.shading.type = "RENDERED"
     yield from settle()
     yield from viewport_follows(
-        "Rendered (EEVEE), default Apply mode: viewport shows the stored lighting",
+        "Rendered (EEVEE), Keep BSDF: viewport shows the stored lighting",
         must_change=False)
     shot("scene_rendered")
     scene = S()
@@ -693,7 +696,7 @@ def session():
     scene.cycles.use_preview_denoising = False
     yield from settle()
     yield from viewport_follows(
-        "Rendered (Cycles), default Apply mode: viewport shows the stored lighting",
+        "Rendered (Cycles), Keep BSDF: viewport shows the stored lighting",
         must_change=False)
     shot("scene_rendered_cycles")
     yield from click(sidebar_point(*TARGETS["remove"]))
@@ -702,12 +705,50 @@ def session():
     yield from viewport_follows("Apply again (Cycles): viewport shows the stored lighting",
                                 must_change=False)
     scene.render.engine = compat_eevee()
+    v3d.spaces.active.shading.type = "SOLID"  # no EEVEE shader compiles: the bake is checked
     yield from settle()
+    yield from default_apply_bakes_the_shadows()
     v3d.spaces.active.shading.type = "MATERIAL"
     yield from files_and_presets()
     yield from node_editor()
     yield from properties_editor()
     yield from preferences()
+
+
+def default_apply_bakes_the_shadows():
+    """A generator step: in EEVEE a click on Apply (the Default: Keep BSDF with Shadows)
+    bakes the transfer modally: the window keeps running (this session's timer is called while
+    the bake is part done), then the materials are lit through it; Remove leaves no bake."""
+    transfer = addon_module("transfer.apply")
+    bake = addon_module("transfer.bake")
+    scene = S()
+    objects = state["objects"]
+    yield from click(sidebar_point(*TARGETS["apply"]))
+    start, part_done, done = time.monotonic(), False, False
+    while time.monotonic() - start < BAKE_TIMEOUT:
+        running = [o for o in getattr(window(), "modal_operators", ())
+                   if o.bl_idname == "SHLIGHT_OT_apply"]
+        lit = all(transfer.uses_transfer(o.data.materials[0]) for o in objects)
+        if running and not lit:
+            part_done = True  # called back while the bake runs: the window is not frozen
+        if lit and not running:
+            done = True
+            break
+        yield 0.2
+    seconds = round(time.monotonic() - start, 1)
+    shot("default_apply_baked")
+    status = [bake.status(scene, o)[0] for o in objects]
+    check("Default Apply (EEVEE): the shadows baked in a modal bake, then Keep BSDF with them",
+          done and part_done and status == ["OK", "OK"], done=done, part_done=part_done,
+          status=status, seconds=seconds)
+    yield from click(sidebar_point(*TARGETS["remove"]))
+    yield from settle(1.0)
+    left = [o.name for o in objects if bake.record(o) is not None
+            or any(a.name.startswith("sh_T") for a in o.data.color_attributes)
+            or o.data.uv_layers.get(bake.UV_NAME) is not None]
+    check("Remove after the Default (EEVEE): no bake, attribute or UV map left",
+          not left and not any(i.name.startswith("SH Transfer") for i in bpy.data.images),
+          left=left)
 
 
 def last_operator(idname):
@@ -874,8 +915,8 @@ def node_editor():
     """The cube's material in the Shader Editor: the group left of the Material Output, a
     forward wire into Surface, its full name."""
     v3d = area("VIEW_3D")
-    # The last Apply (Default, in Cycles) edited the world, not the materials: the artist picks
-    # Keep BSDF in the Mode menu and applies again
+    # The last Remove left the materials as they were: the artist picks Keep BSDF in the Mode
+    # menu and applies again
     set_apply_mode("KEEP_BSDF")
     with bpy.context.temp_override(window=window(), area=v3d, region=region(v3d, "UI")):
         bpy.ops.shlight.apply()

@@ -7,7 +7,7 @@ without the add-on and every value an artist edits is keyframable.
 
 import bpy
 
-from ...choices import APPLY_MODE_ITEMS, APPLY_MODES
+from ...choices import APPLY_MODE_ITEMS, APPLY_MODE_VALUES, APPLY_MODES
 
 APPLY_TARGETS = (
     ("SELECTED", "Selected", "Materials of the selected objects"),
@@ -30,7 +30,7 @@ class SHLIGHT_PG_settings(bpy.types.PropertyGroup):
         name="Mode",
         description="How Apply lights the materials (the line below says what it does in the "
                     "current render engine)",
-        items=APPLY_MODE_ITEMS,
+        items=[(*item, "NONE", APPLY_MODE_VALUES[item[0]]) for item in APPLY_MODE_ITEMS],
         default=APPLY_MODES[0],
     )
     use_capture_width: bpy.props.BoolProperty(

@@ -16,6 +16,8 @@ MODE_NOTES = {
     ("KEEP_BSDF", "EEVEE"): "SH diffuse, lamps, reflection maps",
     ("EMISSION", "CYCLES"): "SH only: no lamps or reflections",
     ("EMISSION", "EEVEE"): "SH only: no lamps or reflections",
+    ("TRANSFER", "CYCLES"): "Baked shadows, lamps, reflections",
+    ("TRANSFER", "EEVEE"): "Baked shadows, lamps, refl. maps",
 }
 # Characters of a note line that the sidebar shows beside its icon at its default width
 # (291 px, UI scale 1; "SH alone: no lamps, shadows or refl" was the most that showed).

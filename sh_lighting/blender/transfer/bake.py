@@ -70,12 +70,18 @@ class BakeInfo(NamedTuple):
     texels: int = 0  # texels baked (inside the atlas's charts)
     texel_seconds: float = 0.0  # of ``seconds``, Cycles' bakes of the texels
 
-    def texel_rate(self):
-        """", per texel: X s (Y s per million texels)" for a report, or "" if none."""
-        if not self.texels:
-            return ""
-        return (f", per texel {self.texel_seconds:.1f} s "
-                f"({self.texel_seconds / self.texels * 1e6:.0f} s per million texels)")
+    def rates(self):
+        """" (X s per 10k corners; per texel Y s, Z s per million texels)" for a report: the
+        corners' and the texels' own time (a floor of 4 corners and 4096 texels is no 10k
+        corners' worth), "" if nothing was baked."""
+        parts = []
+        if self.corners:
+            per_corner = (self.seconds - self.texel_seconds) / self.corners * 1e4
+            parts.append(f"{per_corner:.1f} s per 10k corners")
+        if self.texels:
+            parts.append(f"per texel {self.texel_seconds:.1f} s, "
+                         f"{self.texel_seconds / self.texels * 1e6:.0f} s per million texels")
+        return f" ({'; '.join(parts)})" if parts else ""
 
 
 def _render_modifiers(obj):
@@ -225,15 +231,20 @@ def _texel_size(obj, occluder_size):
     return min(edge, size) if edge > 0 else size
 
 
+def _points(info):
+    """The corners and texels a bake (record ``info``) baked."""
+    return (info.get("corners") or 0) + (info.get("texels") or 0)
+
+
 def estimate_seconds(scene, corners, samples):
-    """Seconds a bake of ``corners`` corners at ``samples`` takes: 9 × (overhead + corners ·
-    samples · rate), the rate measured by the scene's last bake if any (its record), else
-    ``SECONDS_PER_CORNER_SAMPLE``."""
+    """Seconds a bake of ``corners`` corners and texels at ``samples`` takes: 9 × (overhead
+    + corners · samples · rate), the rate measured by the scene's last bake if any (its
+    record: its time over its corners and texels), else ``SECONDS_PER_CORNER_SAMPLE``."""
     rate = SECONDS_PER_CORNER_SAMPLE
-    latest = [r for r in (record(o) for o in scene.objects) if r and r.get("corners")]
+    latest = [r for r in (record(o) for o in scene.objects) if r and _points(r)]
     if latest:
         last = max(latest, key=lambda r: r.get("baked", 0))
-        work = last["corners"] * last["samples"] * len(ATTRIBUTE_NAMES)
+        work = _points(last) * last["samples"] * len(ATTRIBUTE_NAMES)
         measured = (last["seconds"] - len(ATTRIBUTE_NAMES) * SECONDS_PER_BASIS) / work
         rate = measured if measured > 0 else rate
     return len(ATTRIBUTE_NAMES) * (SECONDS_PER_BASIS + corners * samples * rate)

@@ -14,9 +14,11 @@ from ...choices import APPLY_MODE_ITEMS, resolve_mode
 from ..data import scene_data
 from ..shading import materials, notes
 from ..transfer import apply as transfer_apply
+from ..transfer import bake, on_apply
 from ..design import compute as design_compute
 from ..world import compute
 from .. import world_edit
+from .bake_steps import BakeSteps, baked_line, quiet_image_library
 from .polls import coefficients_poll, scene_poll, world_poll
 
 
@@ -150,13 +152,14 @@ class SHLIGHT_OT_reset(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class SHLIGHT_OT_apply(bpy.types.Operator):
+class SHLIGHT_OT_apply(BakeSteps, bpy.types.Operator):
     """Add SH irradiance lighting to the materials of the selected objects (or of all objects),
     reading the scene's coefficients at render time"""
 
     bl_idname = "shlight.apply"
     bl_label = "Apply to Materials"
     bl_options = {"REGISTER", "UNDO"}
+    cancel_message = "Apply cancelled during the shadows' bake: nothing changed"
 
     mode: bpy.props.EnumProperty(
         name="Mode",
@@ -174,8 +177,18 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
 
     @classmethod
     def description(cls, context, props):
-        """The docstring, and how many materials beyond the selection Keep BSDF changes."""
+        """The docstring, what the bake Keep BSDF with Shadows starts costs (or why the Default
+        starts none), and how many materials beyond the selection Keep BSDF changes."""
         text = cls.bl_rna.description
+        scene = context.scene
+        asked = scene.sh_lighting.apply_mode if props.mode == "SCENE" else props.mode
+        if resolve_mode(asked, scene.render.engine) == "TRANSFER":
+            need = on_apply.needed(
+                scene, objects_for_target(context, scene.sh_lighting.apply_target))
+            if on_apply.starts_bake(need, asked):
+                text += f".\nApply {on_apply.cost_line(need)} (Esc stops it)"
+            elif need.objects:
+                text += f".\nApply gives {on_apply.skipped_bake_line(need)}"
         beyond = beyond_selection(context) if props.mode == "SCENE" else []
         if beyond:
             shown = ", ".join(m.name for m in beyond[:3]) + (", ..." if len(beyond) > 3 else "")
@@ -184,16 +197,22 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
                      "whole scene, so every material there gets the SH light")
         return text
 
+    def invoke(self, context, event):
+        self._modal = True  # from a button: a bake before Apply runs modally
+        return self.execute(context)
+
     def execute(self, context):
         scene = context.scene
         settings = scene.sh_lighting
-        mode = getattr(self, "mode", "SCENE")
-        if mode == "SCENE":
-            mode = settings.apply_mode
-        mode = resolve_mode(mode, scene.render.engine)
+        asked = getattr(self, "mode", "SCENE")
+        if asked == "SCENE":
+            asked = settings.apply_mode
+        mode = resolve_mode(asked, scene.render.engine)
         if mode == "WORLD":
             return _edit_world(self, scene)
         objects = objects_for_target(context, settings.apply_target)
+        if mode == "TRANSFER":
+            return self._with_shadows(context, objects, asked)
         mats = materials.materials_of(objects)
         bare = bare_objects_note(materials.objects_without_material(objects))
         if not mats and bare:
@@ -241,6 +260,68 @@ class SHLIGHT_OT_apply(bpy.types.Operator):
         warn = ((skipped or bare) and not changed) or (lamps and changed) or shared
         self.report({"WARNING"} if warn else {"INFO"}, message)
         return {"FINISHED"}
+
+    def _with_shadows(self, context, objects, asked):
+        """Keep BSDF with Shadows: the bake ``on_apply`` asks for (modal from a button),
+        then ``baked``."""
+        scene = context.scene
+        need = on_apply.needed(scene, objects)
+        self._objects = objects
+        self._notes = [f"no shadows on '{name}': {why}" for name, why in need.refused]
+        if not on_apply.starts_bake(need, asked):
+            if need.objects:
+                self._notes.append(on_apply.skipped_bake_line(need))
+            return self.baked(context, None)
+        quiet_image_library()
+        try:
+            job = bake.Bake(scene, need.objects,
+                            report=lambda text: self.report({"INFO"}, text))
+        except (bake.TransferError, RuntimeError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        return self.run_bake(context, job)
+
+    def baked(self, context, info):
+        """After the bake (``info``; None: none ran): Keep BSDF, the transfer where baked."""
+        scene = context.scene
+        notes_ = list(self._notes)
+        if info is not None:
+            self.report({"INFO"}, baked_line(info))
+            notes_ = list(info.notes) + notes_
+        objects = [o for o in self._objects if _alive(o)]
+        try:
+            result, lit = on_apply.apply_with_transfer(scene, objects)
+        except (LookupError, ValueError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        if result.changed and world_edit.is_edited(scene.world):
+            world_edit.remove(scene.world)  # the materials light it now: not twice
+        changed, skipped = len(result.changed), len(result.skipped)
+        message = (f"SH lighting (Keep BSDF with Shadows) applied to {changed} material(s), "
+                   f"{len(lit)} with the transfer's shadows, {skipped} skipped")
+        chosen = {m.name_full for m in materials.materials_of(objects)}
+        widened = [name for name in result.changed if name not in chosen]
+        if widened:
+            message += (f", {len(widened)} of them beyond the selection: Keep BSDF turns the "
+                        "world's diffuse light off for the whole scene")
+        reasons = _skip_reasons(result)
+        if reasons:
+            message += " (" + "; ".join(reasons) + ")"
+        extra = notes.shared_scene_notes(scene, result.changed)
+        reflections = notes.reflection_note(scene, result.changed)
+        bare = bare_objects_note(materials.objects_without_material(objects))
+        message += "".join(f"; {line}" for line in notes_ + extra + [reflections, bare] if line)
+        warn = not changed or extra or (not lit and result.changed)
+        self.report({"WARNING"} if warn else {"INFO"}, message)
+        return {"FINISHED"}
+
+
+def _alive(obj):
+    """Whether ``obj`` still exists (a modal bake lets the user delete nothing, but undo can)."""
+    try:
+        return obj.name is not None
+    except ReferenceError:
+        return False
 
 
 def _edit_world(operator, scene):

@@ -208,7 +208,8 @@ def draw_main(layout, context):
     else:
         lines = notes.status_lines(scene, mode)
         if settings.apply_mode == "AUTO":
-            lines.insert(0, ("INFO", "Default here: Keep BSDF"))
+            label = "Keep BSDF, Shadows" if mode == "TRANSFER" else "Keep BSDF"
+            lines.insert(0, ("INFO", f"Default here: {label}"))
     for icon, line in lines:
         column.label(text=line, icon=icon)
     beyond = beyond_selection(context)

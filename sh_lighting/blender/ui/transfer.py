@@ -2,14 +2,13 @@
 (Shadows)" sub-panel. The logic is ``blender.transfer``; nothing here bakes or writes data
 itself."""
 
-import os
-
 import bpy
 
 from ...choices import MATERIAL_MODES
 from ..transfer import apply as transfer_apply
 from ..transfer import bake
 from . import panels
+from .bake_steps import BakeSteps, baked_line, quiet_image_library
 from ..shading.materials import materials_of
 from .operators import objects_for_target
 from .polls import coefficients_poll, scene_poll
@@ -25,25 +24,11 @@ MODE_ITEMS = (
 )
 
 
-# OpenImageIO's debug channel (a Blender build with it on printed ~90 "OIIO DEBUG" lines per
-# bake): sent nowhere unless the user chose a file for it. OIIO opens it at its first message.
-OIIO_DEBUG_FILE = "OPENIMAGEIO_DEBUG_FILE"
-
-
-def quiet_image_library():
-    """Send OpenImageIO's debug messages to the null device (unless a file is set)."""
-    if not os.environ.get(OIIO_DEBUG_FILE):
-        os.environ[OIIO_DEBUG_FILE] = os.devnull
-# Events a running bake lets through to the viewport (to look around); it keeps the rest.
-NAVIGATION_EVENTS = {"MIDDLEMOUSE", "WHEELUPMOUSE", "WHEELDOWNMOUSE", "TRACKPADPAN",
-                     "TRACKPADZOOM", "MOUSEMOVE", "INBETWEEN_MOUSEMOVE", "NDOF_MOTION"}
-
-
 def _selected_meshes(context):
     return [o for o in (context.selected_objects or ()) if o.type == "MESH"]
 
 
-class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
+class SHLIGHT_OT_bake_transfer(BakeSteps, bpy.types.Operator):
     """Bake the selected meshes' transfer with Cycles: how much of each of the nine SH terms
     reaches each face corner through the scene's shadows and bounce light. The dialog says
     what it will cost; in a window it runs with a progress bar, Esc stops it"""
@@ -115,74 +100,11 @@ class SHLIGHT_OT_bake_transfer(bpy.types.Operator):
         except (bake.TransferError, RuntimeError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        self._job, self._skipped = job, skipped
-        window_manager = context.window_manager
-        window_manager.progress_begin(0, job.steps)
-        modal, self._modal = getattr(self, "_modal", False), False  # a redo runs at once
-        if not modal or bpy.app.background or context.window is None:
-            try:
-                while job.done < job.steps:
-                    job.step()
-                    window_manager.progress_update(job.done)
-            finally:
-                window_manager.progress_end()
-            return self._finish(context)
-        self._timer = window_manager.event_timer_add(0.05, window=context.window)
-        # A handler of the window: the dialog's region that ran execute is closed after it.
-        with context.temp_override(area=None, region=None):
-            window_manager.modal_handler_add(self)
-        self._status(context)
-        return {"RUNNING_MODAL"}
+        self._skipped = skipped
+        return self.run_bake(context, job)
 
-    def modal(self, context, event):
-        """One basis world per timer event; Esc stops between them (nothing stored)."""
-        if event.type == "ESC":
-            self._job.cancel()
-            self._end(context)
-            self.report({"WARNING"}, "Bake Transfer cancelled: nothing changed")
-            return {"CANCELLED"}
-        if event.type != "TIMER":
-            # the scene stays as it is while the bake runs; the view can still be moved
-            return {"PASS_THROUGH"} if event.type in NAVIGATION_EVENTS else {"RUNNING_MODAL"}
-        try:
-            self._job.step()
-        except (bake.TransferError, RuntimeError, ReferenceError) as error:
-            self._end(context)
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        context.window_manager.progress_update(self._job.done)
-        self._status(context)
-        if self._job.done < self._job.steps:
-            return {"RUNNING_MODAL"}
-        self._end(context)
-        return self._finish(context)
-
-    def _status(self, context):
-        if context.workspace is not None:
-            context.workspace.status_text_set(
-                f"Baking the transfer: {self._job.done}/{self._job.steps} done. Esc to cancel")
-
-    def _end(self, context):
-        window_manager = context.window_manager
-        if getattr(self, "_timer", None) is not None:
-            window_manager.event_timer_remove(self._timer)
-            self._timer = None
-        window_manager.progress_end()
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
-
-    def _finish(self, context):
-        try:
-            info = self._job.finish()
-        except (bake.TransferError, RuntimeError) as error:
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        per_10k = info.seconds / max(info.vertices, 1) * 1e4
-        self.report({"INFO"}, (
-            f"Baked the transfer of {len(info.objects)} object(s): {info.vertices} vertices, "
-            f"{info.corners} corners, {info.texels} texels, {info.samples} samples, "
-            f"{info.seconds:.1f} s "
-            f"({per_10k:.1f} s per 10k vertices){info.texel_rate()}"))
+    def baked(self, context, info):
+        self.report({"INFO"}, baked_line(info))
         for reason in self._skipped:
             self.report({"WARNING"}, f"Not baked: {reason}")
         for note in info.notes:

@@ -1,5 +1,6 @@
-"""The default Apply (Edit World in Cycles, Keep BSDF in EEVEE; Apply To Selected, through
-the operator) and Keep BSDF named in Cycles show the stored lighting plus the lamps once.
+"""The default Apply (Edit World in Cycles, Keep BSDF with Shadows in EEVEE: the transfer baked
+first; Apply To Selected, through the operator) and Keep BSDF named in Cycles show the stored
+lighting plus the lamps once.
 
 A white diffuse sphere alone under a world of radiance 0.6 + 0.3 z (its nine coefficients are
 exact) plus a Sun lamp: after Apply each engine's render must be within 2 % of Cycles path
@@ -44,7 +45,7 @@ def _relative(image, s):
 
 def _apply_default(s, mode=None):
     """Apply through the operator with the panel's defaults (Mode "Default": Edit World in
-    Cycles, Keep BSDF in EEVEE), or in ``mode`` named."""
+    Cycles, Keep BSDF with Shadows in EEVEE), or in ``mode`` named."""
     assert s.scene.sh_lighting.apply_mode == "AUTO"
     assert s.scene.sh_lighting.apply_target == "SELECTED"
     done = bpy.ops.shlight.apply() if mode is None else bpy.ops.shlight.apply(mode=mode)

@@ -10,6 +10,7 @@ from blender_scenes import run_execute
 
 from sh_lighting.blender.transfer import bake
 from sh_lighting.blender.ui import transfer as transfer_ui
+from sh_lighting.blender.ui import bake_steps
 from tests.blender.transfer.test_transfer_ui import _scene
 
 
@@ -33,9 +34,9 @@ def test_apply_transfer_after_select_all_names_no_camera_or_lamp(addon):
 
 
 def test_a_bake_sends_the_image_librarys_debug_channel_nowhere(monkeypatch):
-    monkeypatch.delenv(transfer_ui.OIIO_DEBUG_FILE, raising=False)
-    transfer_ui.quiet_image_library()
-    assert os.environ[transfer_ui.OIIO_DEBUG_FILE] == os.devnull
-    monkeypatch.setenv(transfer_ui.OIIO_DEBUG_FILE, "/tmp/mine.log")
-    transfer_ui.quiet_image_library()
-    assert os.environ[transfer_ui.OIIO_DEBUG_FILE] == "/tmp/mine.log"
+    monkeypatch.delenv(bake_steps.OIIO_DEBUG_FILE, raising=False)
+    bake_steps.quiet_image_library()
+    assert os.environ[bake_steps.OIIO_DEBUG_FILE] == os.devnull
+    monkeypatch.setenv(bake_steps.OIIO_DEBUG_FILE, "/tmp/mine.log")
+    bake_steps.quiet_image_library()
+    assert os.environ[bake_steps.OIIO_DEBUG_FILE] == "/tmp/mine.log"

@@ -382,7 +382,7 @@ def test_keep_bsdf_on_the_selection_lights_every_material_the_world_lit(addon):
     (lit, lit_mat), (other, other_mat) = two_objects_with_materials()
     scene_data.store(scene, KNOWN, SCRIPT)
     assert scene.sh_lighting.apply_target == "SELECTED"
-    result, reports = run_execute(operators.SHLIGHT_OT_apply)  # the defaults
+    result, reports = run_execute(operators.SHLIGHT_OT_apply, mode="KEEP_BSDF")
     assert result == {"FINISHED"} and materials.mode_of(other_mat) == "KEEP_BSDF"
     assert reports == [({"INFO"}, "SH lighting (Keep BSDF) applied to 2 material(s), 0 skipped, "
                                   "1 of them beyond the selection: Keep BSDF turns the world's "
