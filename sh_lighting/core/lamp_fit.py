@@ -18,9 +18,11 @@ or ``max_lamps`` are in, then each lamp in turn is swapped for the best other ca
 that lowers the error. The greedy path depends on the candidates, so it runs on a coarse and
 a fine grid of half-angles and blends; coordinate descent refines each result's spots (axis,
 roll, scale, angle, blend) and the better one is kept. Four rounds then weight each surface of
-the room by its error (towards the worst surface's, a minimax, rather than the mean), and a
-last refinement runs on twice as fine a sampling. Directions are the light's local
-axes (nadir −Z), intensities in any unit (candela in, candela out).
+the room by its error (towards the worst surface's, a minimax, rather than the mean), each
+followed by a joint refinement of all spots' parameters (Levenberg–Marquardt, the powers by
+NNLS: variable projection), and a last refinement (coordinate descent, then joint) runs on
+twice as fine a sampling. Directions are the light's local axes (nadir −Z), intensities in
+any unit (candela in, candela out).
 """
 
 from dataclasses import dataclass
@@ -36,6 +38,7 @@ FINE_HALF_ANGLES_DEG = (3.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 19.0, 22.0, 
 FINE_BLENDS = (0.05, 0.15, 0.25, 0.4, 0.55, 0.7, 0.85, 1.0)
 CANDIDATE_GRIDS = ((HALF_ANGLES_DEG, BLENDS), (FINE_HALF_ANGLES_DEG, FINE_BLENDS))
 REWEIGHTS = 4  # rounds of weighting each surface by its error before the fine refinement
+JOINT_ITERATIONS = (15, 40)  # Levenberg–Marquardt steps per round and in the fine refinement
 
 
 @dataclass(frozen=True)
@@ -117,9 +120,10 @@ def fit_lamps(intensity, max_lamps=8, error_target=0.03, room=None, n_theta=48, 
 
     The objective is the relative squared error of I over the sphere (solid-angle weighted)
     and, with ``room`` = d metres, that of the illuminance E = I cos/r² on each lit surface
-    of a room around the luminaire (floor and ceiling d below and above, |x|, |y| ≤ 2d; walls
-    d away, −d ≤ z ≤ 3d), each surface normalised by its own RMS: a dim wall counts as much
-    as the bright floor. ``error_target`` applies to the RMS of these relative errors.
+    of a room around the luminaire (the floor d below, |x|, |y| ≤ 2d; walls d away,
+    −d ≤ z ≤ 3d), each surface normalised by its own RMS: a dim wall counts as much as the
+    bright floor. The ceiling is left out (the sphere's term still covers the light upward):
+    a downlight's faint, unfittable ceiling drew the lamps away from the floor and walls. ``error_target`` applies to the RMS of these relative errors.
     Returns a :class:`LampFit` with the fewest lamps (at most ``max_lamps``) meeting it where
     the greedy search finds them, and the intensity error over the sphere on a finer grid.
     """
@@ -150,13 +154,15 @@ def fit_lamps(intensity, max_lamps=8, error_target=0.03, room=None, n_theta=48, 
         if room_errors.size == 0 or room_errors.max() <= 0:
             break
         scale[1:] *= np.clip(room_errors / np.sqrt(np.mean(room_errors ** 2)), 0.5, 2.0)
-        lamps = refine(lamps, rows, row_weight * _per_row(scale, blocks),
-                       b * _per_row(scale, blocks), sweeps=6)
+        lamps = refine_joint(lamps, rows, row_weight * _per_row(scale, blocks),
+                             b * _per_row(scale, blocks), JOINT_ITERATIONS[0])
     # refined on twice as fine a sampling: a narrow spot cannot hide between samples
     fine_dirs, fine_weights = sphere_samples(2 * n_theta, 2 * n_phi)
     rows, row_weight, b, blocks = _objective(intensity, fine_dirs, fine_weights, room, 40)
     lamps = refine(lamps, rows, row_weight * _per_row(scale, blocks),
                    b * _per_row(scale, blocks), sweeps=6)
+    lamps = refine_joint(lamps, rows, row_weight * _per_row(scale, blocks),
+                         b * _per_row(scale, blocks), JOINT_ITERATIONS[1])
     fine_dirs, fine_weights = sphere_samples(2 * n_theta, 2 * n_phi)
     fine_error = relative_rmse(lamp_intensity(lamps, fine_dirs), intensity(fine_dirs),
                                fine_weights)
@@ -211,7 +217,8 @@ def _objective(intensity, dirs, weights, room, room_samples):
     each block's row count."""
     blocks = [(dirs, np.sqrt(weights))]
     if room is not None:
-        blocks += _room_blocks(room, room_samples)
+        floor, _ceiling, *walls = _room_blocks(room, room_samples)
+        blocks += [floor] + walls
     rows, row_weight, b = [], [], []
     for block_dirs, factor in blocks:
         t = np.asarray(intensity(block_dirs), dtype=np.float64) * factor
@@ -307,6 +314,84 @@ def refine(lamps, dirs, row_weight, b, sweeps=12, with_error=False):
                             float(value), tuple(float(a) for a in x_axis),
                             (float(scale[0]), float(scale[1]))))
     return (tuple(out), best) if with_error else tuple(out)
+
+
+SPOT_LOW = np.array([-np.inf, -np.inf, -np.inf, np.log(0.2), np.log(0.2), np.radians(1.0), 0.02])
+SPOT_HIGH = np.array([np.inf, np.inf, np.inf, np.log(5.0), np.log(5.0), np.pi / 2, 1.0])
+
+
+def refine_joint(lamps, dirs, row_weight, b, iterations, step=1e-3):
+    """Levenberg–Marquardt on all spots' parameters at once, the powers by NNLS at every
+    trial (variable projection: the Jacobian of the masks times the powers, projected off
+    the lamps' columns). Each spot's seven parameters: two tilts and a roll of its frame,
+    log X and Y scale, half-angle and blend; derivatives by forward differences."""
+    norm = np.linalg.norm(b)
+    frames = [_frame(lamp) for lamp in lamps if lamp.kind != "POINT"]
+    params = [np.array([0.0, 0.0, 0.0, np.log(f[2][0]), np.log(f[2][1]), f[3], f[4]])
+              for f in frames]
+    point = [lamp for lamp in lamps if lamp.kind == "POINT"][:1]
+
+    def columns(params):
+        cols = [row_weight * spot_mask(dirs, *_spot(f, p)) for f, p in zip(frames, params)]
+        return np.stack(cols + [row_weight] * len(point), 1)
+
+    matrix = columns(params)
+    x, residual = nnls(matrix, b)
+    best, damping = residual / norm, 1e-2
+    for _ in range(iterations):
+        jacobian = np.zeros((len(b), 7 * len(frames)))
+        for i, (frame, p) in enumerate(zip(frames, params)):
+            for k in range(7 if x[i] > 0 else 0):
+                q = p.copy()
+                q[k] += step if q[k] + step <= SPOT_HIGH[k] else -step
+                moved = row_weight * spot_mask(dirs, *_spot(frame, q))
+                jacobian[:, 7 * i + k] = x[i] * (moved - matrix[:, i]) / (q[k] - p[k])
+        basis, _ = np.linalg.qr(matrix[:, x > 0])
+        jacobian -= basis @ (basis.T @ jacobian)
+        gradient = jacobian.T @ (matrix @ x - b)
+        normal = jacobian.T @ jacobian
+        diagonal = np.where(np.diag(normal) > 0, np.diag(normal), 1.0)
+        for _ in range(6):  # raise the damping until a step lowers the error
+            delta = np.linalg.lstsq(normal + damping * np.diag(diagonal), -gradient,
+                                    rcond=None)[0]
+            trial = [np.clip(p + delta[7 * i:7 * i + 7], SPOT_LOW, SPOT_HIGH)
+                     for i, p in enumerate(params)]
+            trial_matrix = columns(trial)
+            trial_x, residual = nnls(trial_matrix, b)
+            if residual / norm < best - 1e-7:
+                params, matrix, x, best = trial, trial_matrix, trial_x, residual / norm
+                damping = max(damping / 3.0, 1e-6)
+                break
+            damping *= 4.0
+        else:
+            break
+    out = []
+    for frame, p, value in zip(frames, params, x):
+        if value > 0:
+            axis, half, blend, x_axis, scale = _spot(frame, p)
+            out.append(Lamp("SPOT", tuple(float(a) for a in axis), float(half), float(blend),
+                            float(value), tuple(float(a) for a in x_axis), scale))
+    if point and x[-1] > 0:
+        out.append(_lamp(None, x[-1]))
+    return tuple(out)
+
+
+def _frame(lamp):
+    """A spot's axis, local +X, scale, half-angle and blend."""
+    x_axis = perpendicular(lamp.axis) if lamp.x_axis is None else np.array(lamp.x_axis)
+    return (np.array(lamp.axis, dtype=np.float64), x_axis, tuple(lamp.scale), lamp.half_angle,
+            lamp.blend)
+
+
+def _spot(frame, p):
+    """spot_mask's arguments for ``frame`` moved by the parameters ``p`` of refine_joint."""
+    axis, u = frame[0], frame[1]
+    tilted = axis + p[0] * u + p[1] * np.cross(axis, u)
+    tilted /= np.linalg.norm(tilted)
+    u = u - tilted * (u @ tilted)
+    u /= np.linalg.norm(u)
+    x_axis = np.cos(p[2]) * u + np.sin(p[2]) * np.cross(tilted, u)
+    return tilted, p[5], p[6], x_axis, (float(np.exp(p[3])), float(np.exp(p[4])))
 
 
 def perpendicular(axis):
