@@ -18,7 +18,7 @@ WIDTH = 100
 # Written by: report.py (methods), by hand (node_group, *_reading), bench_lights (lights),
 # bench_transfer (transfer, transfer_equal_error), bench_photo (photo), bench_sizes (sizes),
 # bench_real_scene (real_scene), bench_world_edit (world_edit), bench_eevee_default
-# (eevee_default), the commands' benchmark (commands), bench_near_field (near_field).
+# (eevee_default), bench_compile (compile), the commands' benchmark (commands), bench_near_field (near_field).
 ORDER = (
     "methods",
     "node_group",
@@ -38,6 +38,8 @@ ORDER = (
     "world_edit_reading",
     "eevee_default",
     "eevee_default_reading",
+    "compile",
+    "compile_reading",
     "commands",
     "near_field",
 )
