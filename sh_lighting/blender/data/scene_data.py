@@ -1,8 +1,8 @@
 """Where a scene keeps its SH lighting, and ``store``: the one function that writes it.
 
 Custom properties that an Attribute node reads at render time in any Blender: c_lm in
-``scene["sh_L00"]`` ... ``["sh_L22"]`` (RGB), the gains s_lm in ``["sh_L00_gain"]`` ..., the
-lighting L_lm = s_lm · c_lm; ``["sh_computed"]`` the Reset values, ``["sh_provenance"]`` where
+``scene["sh_L00"]`` ... ``["sh_L22"]`` (RGB), the gains s_lm in ``["sh_L00_gain"]`` ... (read
+through three driven copies, ``gain_packs``), the lighting L_lm = s_lm · c_lm; ``["sh_computed"]`` the Reset values, ``["sh_provenance"]`` where
 the values came from. ``store`` validates, writes c = coeffs and s = 1 (or c only, ``gains=
 "KEEP"``), follows the ``animation`` policy (KEY, CLEAR, REFUSE) over animated properties,
 records the provenance, tags the depsgraph, and returns a ``Stored`` array whose ``note`` says
@@ -14,6 +14,7 @@ import numpy as np
 
 from ...core.coefficients import FLOAT32_MAX, check_coefficients, real_number, type_name
 from ...core.sh import COEFFICIENT_NAMES, COEFFICIENT_PHRASES
+from . import gain_packs
 from .animated import (  # noqa: F401 (the write policy's names, also used through here)
     ANIMATION_POLICIES,
     AnimatedError,
@@ -223,10 +224,13 @@ def gains_animated(scene):
 
 def add_missing_gains(scene):
     """Gains s = 1 for the coefficients of ``scene`` that have none (files from before the
-    gains render as before), with their UI data and a tag; returns the names written."""
+    gains render as before), and the packs the node groups read them through
+    (``gain_packs``), with their UI data and a tag; returns the names written."""
     missing = [g for n, g in zip(PROPERTY_NAMES, GAIN_NAMES) if n in scene and g not in scene]
     for name in missing:
         scene[name] = 1.0
+    if has_coefficients(scene):
+        missing += gain_packs.ensure(scene, GAIN_NAMES)
     if missing:
         ensure_ui(scene)
         scene.update_tag()
@@ -265,6 +269,7 @@ def store(scene, coeffs, provenance, animation=DEFAULT_ANIMATION, gains="UNIT"):
         for name in found:
             scene.keyframe_insert(f'["{name}"]', frame=frame)
         note = f"keyed at frame {frame} because {listed(found)} animated"
+    gain_packs.ensure(scene, GAIN_NAMES)
     if record["source"] == "WORLD" and "edit" not in record:
         scene[COMPUTED_PROPERTY] = [float(v) for v in c.ravel()]
         scene[COMPUTED_PROVENANCE_PROPERTY] = record

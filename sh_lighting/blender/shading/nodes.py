@@ -2,8 +2,9 @@
 
 E(n) = c1 L22 (x² − y²) + c3 L20 z² + c4 L00 − c5 L20 + 2 c1 (L2-2 xy + L21 xz + L2-1 yz)
 + 2 c2 (L11 x + L1-1 y + L10 z), with L_lm = s_lm · c_lm read at render time by Attribute
-nodes (View Layer) from the scene's ``sh_L..`` properties: one group per file, no add-on
-needed to render. Inputs Normal (zero: the shading normal) and Albedo; outputs Irradiance,
+nodes (View Layer) from the scene's ``sh_L..`` properties and the gains' three packs
+(``data.gain_packs``: 12 lookups, which EEVEE compiles 25× faster than 18): one group per file,
+no add-on needed to render. Inputs Normal (zero: the shading normal) and Albedo; outputs Irradiance,
 Diffuse = Albedo · E / π and Shader (an Emission of Diffuse). Found by ``GROUP_MARKER``;
 ``ensure_node_group`` rebuilds it in place. Details: docs/modules.md.
 """
@@ -14,13 +15,13 @@ import bpy
 
 from ...core.irradiance import C1, C2, C3, C4, C5
 from ...core.sh import COEFFICIENT_NAMES
-from ..data import scene_data
-from ..data.scene_data import GAIN_NAMES, PROPERTY_NAMES
+from ..data import gain_packs, scene_data
+from ..data.scene_data import PROPERTY_NAMES
 
 GROUP_NAME = "SH Irradiance"
 # Custom property on the node group; its value is the layout version of the tree inside.
 GROUP_MARKER = "sh_lighting_group"
-GROUP_VERSION = 4
+GROUP_VERSION = 5
 DESCRIPTION = (
     "Diffuse lighting from 9 spherical-harmonic coefficients (scene custom properties "
     "sh_L00 ... sh_L22 times sh_L00_gain ... sh_L22_gain), eq. 13 of Ramamoorthi and "
@@ -78,9 +79,15 @@ def ensure_node_group():
     tree[GROUP_MARKER] = GROUP_VERSION
     if hasattr(tree, "description"):  # NodeTree.description is not in every 4.x
         tree.description = DESCRIPTION
+    readable_everywhere()
+    return tree
+
+
+def readable_everywhere():
+    """Give every scene with coefficients what the groups read: missing gains (s = 1) and
+    the gains' packs (``gain_packs``). Each builder of a group reading the lighting calls it."""
     for scene in bpy.data.scenes:
         scene_data.add_missing_gains(scene)
-    return tree
 
 
 def build_node_group(name=GROUP_NAME):
@@ -138,6 +145,7 @@ class _Builder:
 
     def __init__(self, tree):
         self.tree = tree
+        self.readers = {}  # nodes read once per group (``lighting_readers``'s gain packs)
 
     def node(self, kind, column, row, label="", **settings):
         node = self.tree.nodes.new(kind)
@@ -222,18 +230,26 @@ def _factors(b, n):
 
 def lighting_readers(b, index, column, gain_column, row):
     """The Attribute nodes (type View Layer) reading coefficient ``index`` of the scene being
-    rendered: (c_lm vector socket, s_lm gain socket). Every group reading the lighting uses
-    these (the "SH Transfer" group too), so all read the same properties the same way."""
+    rendered: (c_lm vector socket, s_lm gain socket). The gain comes from its pack
+    (``gain_packs``: three gains a lookup, 12 lookups in all), read once per group and split.
+    Every group reading the lighting uses these (the "SH Transfer" group too), so all read
+    the same properties the same way."""
     name = COEFFICIENT_NAMES[index]
     coefficient = b.node(
         "ShaderNodeAttribute", column, row, name,
         attribute_type="VIEW_LAYER", attribute_name=PROPERTY_NAMES[index],
     )
-    gain = b.node(
-        "ShaderNodeAttribute", gain_column, row + 0.5, f"{name} gain",
-        attribute_type="VIEW_LAYER", attribute_name=GAIN_NAMES[index],
-    )
-    return coefficient.outputs[ATTRIBUTE_VECTOR], gain.outputs[ATTRIBUTE_FAC]
+    pack, element = gain_packs.pack_of(index)
+    split = b.readers.get(pack)
+    if split is None:
+        reader = b.node(
+            "ShaderNodeAttribute", gain_column - 1, row + 0.5, f"gains {pack[-1]}",
+            attribute_type="VIEW_LAYER", attribute_name=pack,
+        )
+        split = b.node("ShaderNodeSeparateXYZ", gain_column, row + 0.5, f"gains {pack[-1]}")
+        b.link(reader.outputs[ATTRIBUTE_VECTOR], split.inputs[0])
+        b.readers[pack] = split
+    return coefficient.outputs[ATTRIBUTE_VECTOR], split.outputs[element]
 
 
 def ensure_interface(tree):

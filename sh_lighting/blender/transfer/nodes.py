@@ -12,12 +12,18 @@ that diffuse rays do not see: the bounce is in T_lm already). Unbaked objects re
 import bpy
 
 from ...core.sh import COEFFICIENT_NAMES
-from ..shading.nodes import Builder, diffuse_outputs, ensure_interface, lighting_readers
+from ..shading.nodes import (
+    Builder,
+    diffuse_outputs,
+    ensure_interface,
+    lighting_readers,
+    readable_everywhere,
+)
 from .stale import ATTRIBUTE_NAMES, UV_NAME, atlas_images
 
 GROUP_NAME = "SH Transfer"
 GROUP_MARKER = "sh_lighting_transfer_group"
-GROUP_VERSION = 2
+GROUP_VERSION = 3
 DESCRIPTION = (
     "Diffuse lighting with shadows and interreflection: E = sum of T_lm (baked per corner in "
     "the mesh attributes sh_T00 ... sh_T22) times L_lm (scene properties sh_L00 ... sh_L22 "
@@ -42,6 +48,7 @@ def ensure_node_group():
         tree = bpy.data.node_groups.new(GROUP_NAME, "ShaderNodeTree")
     ensure_interface(tree)
     _build_nodes(tree)
+    readable_everywhere()
     tree[GROUP_MARKER] = GROUP_VERSION
     if hasattr(tree, "description"):
         tree.description = DESCRIPTION

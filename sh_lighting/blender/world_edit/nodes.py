@@ -19,10 +19,10 @@ import bpy
 
 from ...core.sh import COEFFICIENT_NAMES, Y00, Y1, Y2_XY, Y20, Y22
 from ..data.node_links import WORLD_EDIT_MARKER
-from ..shading.nodes import Builder, lighting_readers
+from ..shading.nodes import Builder, lighting_readers, readable_everywhere
 
 GROUP_NAME = "SH World Edit"
-GROUP_VERSION = 1
+GROUP_VERSION = 2
 DESCRIPTION = (
     "Adds the designed SH lighting change to the world's colour: max(0, k·Color + "
     "Σ (L_lm − L0_lm) Y_lm(direction) / Strength), L_lm read from the scene's sh_L00 ... "
@@ -127,6 +127,7 @@ def build(tree, own, keep, sources=(), luminance=(0.2126, 0.7152, 0.0722)):
     ``lights.Source``s the world must no longer emit (their Sun lamps do), ``luminance`` the
     RGB weights of their thresholds."""
     tree.nodes.clear()
+    readable_everywhere()
     b = Builder(tree)
     group_in = b.node("NodeGroupInput", 0, 4)
     coordinates = b.node("ShaderNodeTexCoord", 0, 1)

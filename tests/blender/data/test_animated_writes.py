@@ -1,7 +1,8 @@
 """Writes over keyframed or driven coefficients and gains.
 
 Every writer ends with what it stored being what renders: checked through the evaluated
-scene (what the depsgraph hands the render) at two frames, after frame changes.
+scene (what the depsgraph hands the render: the gains through their packs) at two frames,
+after frame changes.
 """
 
 import bpy
@@ -10,7 +11,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from sh_lighting import api
-from sh_lighting.blender.data import scene_data
+from sh_lighting.blender.data import gain_packs, scene_data
 from sh_lighting.blender.data.scene_data import GAIN_NAMES, PROPERTY_NAMES
 
 pytestmark = pytest.mark.blender
@@ -24,7 +25,10 @@ def rendered(scene, frame):
     scene.frame_set(frame)
     evaluated = scene.evaluated_get(bpy.context.evaluated_depsgraph_get())
     c = np.array([list(evaluated[name]) for name in PROPERTY_NAMES])
-    s = np.array([float(evaluated[name]) for name in GAIN_NAMES])
+    s = np.concatenate([list(evaluated[name]) for name in gain_packs.PACK_NAMES])
+    # the packs are what the node groups read: the gains, exactly (float32)
+    gains = np.array([float(evaluated[name]) for name in GAIN_NAMES], dtype=np.float32)
+    assert np.array_equal(s.astype(np.float32), gains), (s, gains)
     return c * s[:, None]
 
 

@@ -27,7 +27,7 @@ from blender_scenes import (
     setup_render,
     unpack,
 )
-from sh_lighting.blender.data import compat, scene_data
+from sh_lighting.blender.data import compat, gain_packs, scene_data
 from sh_lighting.blender.shading import materials, nodes
 from sh_lighting.core import irradiance, project_equirect, reference_irradiance
 
@@ -87,8 +87,10 @@ def test_group_is_native_reused_and_complete():
     kinds = {node.bl_idname for node in group.nodes}
     assert not kinds & {"ShaderNodeScript"}, "no OSL: must run in EEVEE and on GPUs"
     attributes = [n for n in group.nodes if n.bl_idname == "ShaderNodeAttribute"]
+    # Nine coefficients and the gains in three packs: 12 lookups (EEVEE's compile is steep
+    # in their number: 18 took 25x as long, benchmarks/REPORT.md "compile")
     assert sorted(a.attribute_name for a in attributes) == sorted(
-        scene_data.PROPERTY_NAMES + scene_data.GAIN_NAMES
+        scene_data.PROPERTY_NAMES + gain_packs.PACK_NAMES
     )
     assert {a.attribute_type for a in attributes} == {"VIEW_LAYER"}
     sockets = [(s.name, s.in_out, s.socket_type) for s in group.interface.items_tree]
@@ -177,8 +179,20 @@ FARM_SCRIPT = textwrap.dedent(
 
 
 def test_saved_blend_renders_the_same_without_the_addon(tmp_path):
+    """With a keyframed gain: the gains reach the render through their packs' drivers,
+    which Blender evaluates without the add-on (and without Python)."""
     scene = sh_scene("sphere", size=48)
+    for frame, value in ((1, 0.5), (5, 3.0)):
+        scene["sh_L10_gain"] = value
+        scene.keyframe_insert(data_path='["sh_L10_gain"]', frame=frame)
+    for curve in compat.action_fcurves(scene):
+        for point in curve.keyframe_points:
+            point.interpolation = "LINEAR"
+    scene.frame_set(3)  # s = 1.75 exactly
+    expected = COEFFS.copy()
+    expected[2] *= 1.75
     rgb, alpha, normal = render(scene, tmp_path / "local.exr")
+    check_against_core(rgb, alpha, normal, expected, "local render, keyed gain 1.75")
     blend = tmp_path / "farm.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend), copy=True)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
@@ -197,7 +211,7 @@ def test_saved_blend_renders_the_same_without_the_addon(tmp_path):
     rgb_farm, alpha_farm, normal_farm = unpack(read_exr(farm / "farm.exr"))
     assert np.array_equal(alpha_farm, alpha)
     assert np.abs(rgb_farm - rgb).max() < 1e-6, "farm render differs from the local one"
-    check_against_core(rgb_farm, alpha_farm, normal_farm, COEFFS, "farm render (no add-on)")
+    check_against_core(rgb_farm, alpha_farm, normal_farm, expected, "farm render (no add-on)")
 
 
 # ---------------------------------------------------------------- (e) EEVEE, once

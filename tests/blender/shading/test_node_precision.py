@@ -11,7 +11,8 @@ from quadrature import random_directions
 from test_stability import NODE_GROUP_ORDER, NODE_ORDERS, eval_node_chain
 
 from sh_lighting.blender.shading import nodes
-from sh_lighting.blender.data.scene_data import GAIN_NAMES, PROPERTY_NAMES
+from sh_lighting.blender.data import gain_packs
+from sh_lighting.blender.data.scene_data import PROPERTY_NAMES
 
 pytestmark = pytest.mark.blender
 
@@ -76,7 +77,10 @@ def group_irradiance(tree, normals, coeffs, gains):
     attributes = {
         name: np.broadcast_to(coeffs[i], (len(normals), 3)) for i, name in enumerate(PROPERTY_NAMES)
     }
-    attributes.update({name: F32(gains[i]) for i, name in enumerate(GAIN_NAMES)})
+    size = gain_packs.PACK_SIZE
+    attributes.update({name: np.broadcast_to(F32(gains[k * size:(k + 1) * size]),
+                                             (len(normals), size))
+                       for k, name in enumerate(gain_packs.PACK_NAMES)})
     (output,) = [n for n in tree.nodes if n.bl_idname == "NodeGroupOutput"]
     return TreeEvaluator(tree, normals, attributes).input(output.inputs["Irradiance"])
 
@@ -88,7 +92,7 @@ def test_group_tree_is_the_float32_model_bit_for_bit():
     coeffs = (rng.normal(size=(9, 3)) * scale).astype(F32)
     tree = nodes.build_node_group()
     read = {n.attribute_name for n in tree.nodes if n.bl_idname == "ShaderNodeAttribute"}
-    assert read == set(PROPERTY_NAMES) | set(GAIN_NAMES)
+    assert read == set(PROPERTY_NAMES) | set(gain_packs.PACK_NAMES)
     got = group_irradiance(tree, normals, coeffs, np.ones(9))  # gains 1: nothing rounds more
     for channel in range(3):
         model = eval_node_chain(coeffs[:, channel], normals, NODE_ORDERS[NODE_GROUP_ORDER])
