@@ -28,6 +28,12 @@ def _path(name):
     return f'["{name}"]'
 
 
+def _is_pack(value):
+    """True for an ID property array of 3 floats (an int array would truncate the gains)."""
+    return (hasattr(value, "to_list") and getattr(value, "typecode", "") in ("f", "d")
+            and len(value) == PACK_SIZE)
+
+
 def _driver_is_right(curve, scene, gain_name):
     driver = curve.driver
     if (driver.type != "SUM" or len(driver.variables) != 1 or len(curve.keyframe_points)
@@ -48,8 +54,7 @@ def ensure(scene, gain_names):
     written = []
     for pack, name in enumerate(PACK_NAMES):
         gains = gain_names[pack * PACK_SIZE:(pack + 1) * PACK_SIZE]
-        value = scene.get(name)
-        if not (hasattr(value, "to_list") and len(value) == PACK_SIZE):
+        if not _is_pack(scene.get(name)):
             scene[name] = [float(scene.get(g, 1.0)) for g in gains]
             written.append(name)
         scene.id_properties_ui(name).update(
@@ -76,6 +81,36 @@ def ensure(scene, gain_names):
             if name not in written:
                 written.append(name)
     return written
+
+
+def broken(scene, gain_names):
+    """[(pack name, message)] of the packs that are missing, not 3 numbers or not driven by
+    their gains, once ``scene`` has any pack or pack driver (a file from before the packs,
+    whose groups read the gains directly, has none: nothing is wrong with it)."""
+    animation = scene.animation_data
+    drivers = {} if animation is None else {
+        (c.data_path, c.array_index): c for c in animation.drivers}
+    if not any(name in scene for name in PACK_NAMES) and not any(
+            path == _path(name) for path, _i in drivers for name in PACK_NAMES):
+        return []
+    found = []
+    for pack, name in enumerate(PACK_NAMES):
+        gains = gain_names[pack * PACK_SIZE:(pack + 1) * PACK_SIZE]
+        value = scene.get(name)
+        if value is None:
+            why = "is missing"
+        elif not _is_pack(value):
+            why = "is not 3 decimal numbers"
+        elif not all(drivers.get((_path(name), e)) is not None
+                     and _driver_is_right(drivers[(_path(name), e)], scene, g)
+                     for e, g in enumerate(gains)):
+            why = "is not driven by its gains"
+        else:
+            continue
+        found.append((name, (
+            f"scene['{name}'], the copy of {', '.join(gains)} the render reads, {why}: the "
+            "render reads wrong gains; Repair writes it again")))
+    return found
 
 
 def has_packs(scene):

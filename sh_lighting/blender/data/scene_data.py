@@ -149,7 +149,8 @@ def get_channels(scene):
 
 def problems(scene):
     """[(property name, message)] of every coefficient and gain property of ``scene`` that
-    ``get_coefficients`` would refuse (empty when all are valid or none exist)."""
+    ``get_coefficients`` would refuse, and of every broken pack of the gains
+    (``gain_packs.broken``); empty when all are valid or none exist."""
     found = []
     for index, (name, gain_name) in enumerate(zip(PROPERTY_NAMES, GAIN_NAMES)):
         for prop, read in ((name, read_channel), (gain_name, read_gain)):
@@ -159,15 +160,16 @@ def problems(scene):
                 read(scene, index)
             except PropertyError as error:
                 found.append((prop, str(error)))
-    return found
+    return found + gain_packs.broken(scene, GAIN_NAMES)
 
 
 def repair(scene):
     """Write a valid value over every invalid, unanimated coefficient or gain property: a
-    gain 1, a channel its Reset value (the last computed from the world) or 0. Returns the
+    gain 1, a channel its Reset value (the last computed from the world) or 0; broken packs
+    of the gains are made again (``gain_packs.ensure``). Returns the
     names repaired; a PropertyError, nothing changed, when an invalid one is animated (its
     keyframes or driver would write it again)."""
-    bad = [name for name, _message in problems(scene)]
+    bad = [name for name, _message in problems(scene) if name not in gain_packs.PACK_NAMES]
     animated_bad = {name: how for name, how in animated(scene, bad).items()}
     if animated_bad:
         name = sorted(animated_bad)[0]
@@ -183,11 +185,14 @@ def repair(scene):
         else:
             row = PROPERTY_NAMES.index(name)
             scene[name] = [float(v) for v in computed[row]] if computed is not None else [0.0] * 3
-    if bad:
+    packs = [name for name, _message in gain_packs.broken(scene, GAIN_NAMES)]
+    if packs:
+        gain_packs.ensure(scene, GAIN_NAMES)
+    if bad or packs:
         ensure_ui(scene)
         scene.update_tag()
         redraw()
-    return bad
+    return bad + packs
 
 
 def validate(coeffs):

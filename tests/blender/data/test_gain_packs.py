@@ -114,3 +114,32 @@ def test_a_copied_scene_reads_its_own_gains():
     assert evaluated_packs(copy)[0] == 0.125
     assert evaluated_packs(scene)[0] == 1.0  # the original's gains are its own
     assert all(c.driver.variables[0].targets[0].id == copy for c in drivers_of(copy))
+
+
+@pytest.mark.parametrize("damage", ["deleted", "text", "whole numbers", "driver deleted"])
+def test_a_broken_pack_is_named_and_repaired(damage):
+    scene = stored_scene()
+    scene["sh_L11_gain"] = 0.5
+    if damage == "deleted":
+        del scene["sh_gains_1"]
+    elif damage == "text":
+        scene["sh_gains_1"] = "gains"
+    elif damage == "whole numbers":
+        scene["sh_gains_1"] = [1, 1, 1]  # an int array would truncate 0.5 to 0
+    else:
+        scene.animation_data.drivers.remove(drivers_of(scene)[3])
+    (found,) = scene_data.problems(scene)
+    assert found[0] == "sh_gains_1" and "Repair writes it again" in found[1], found
+    assert "sh_L11_gain" in found[1]
+    assert scene_data.repair(scene) == ["sh_gains_1"]
+    assert scene_data.problems(scene) == []
+    assert np.array_equal(evaluated_packs(scene).astype(np.float32), gains_of(scene))
+
+
+def test_a_file_from_before_the_packs_has_no_problem():
+    scene = stored_scene()
+    for curve in drivers_of(scene):
+        scene.animation_data.drivers.remove(curve)
+    for name in gain_packs.PACK_NAMES:
+        del scene[name]
+    assert scene_data.problems(scene) == []  # its version-4 group reads the gains directly
