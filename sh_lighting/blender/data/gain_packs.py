@@ -67,10 +67,13 @@ def ensure(scene, gain_names):
             if curve is not None:
                 animation.drivers.remove(curve)
             curve = scene.driver_add(_path(name), element)
-            # driver_add maps the driver through keys (0, 0), (1, 1), which round 1 ulp:
-            # without them the F-curve passes the driver's value on as it is.
+            # driver_add maps the driver through keys (0, 0), (1, 1) (5.0; they round 1
+            # ulp) or a Generator modifier (4.2): without them the F-curve passes the
+            # driver's value on as it is.
             for point in reversed(list(curve.keyframe_points)):
                 curve.keyframe_points.remove(point)
+            for modifier in reversed(list(curve.modifiers)):
+                curve.modifiers.remove(modifier)
             curve.driver.type = "SUM"
             variable = curve.driver.variables.new()
             variable.name = "gain"
