@@ -387,6 +387,14 @@ def add_eevee_reflections(b, leaves, outputs, active, maps):
     emission = b.node("ShaderNodeEmission", f"{LABEL}: the world's reflections (EEVEE)")
     b.tree.links.new(total, emission.inputs["Color"])
     emission.inputs["Strength"].default_value = 1.0
+    add_for_eevee(b, emission.outputs[0], outputs, active, "BSDF + SH diffuse + SH glossy (EEVEE)")
+    return True
+
+
+def add_for_eevee(b, shader, outputs, active, label):
+    """Add ``shader`` to what EEVEE renders and Cycles does not: to each Material Output of
+    ``outputs`` whose target is EEVEE (an Add Shader labelled ``label``), else to a new one
+    (appended to ``b.added``) with the links of ``active``, which stays Cycles' output."""
     targets = [output for output in outputs if output.target == "EEVEE"]
     if not targets:
         output = b.node("ShaderNodeOutputMaterial", "SH Lighting: EEVEE Material Output",
@@ -401,10 +409,9 @@ def add_eevee_reflections(b, leaves, outputs, active, maps):
         surface = output.inputs["Surface"]
         original = source_socket(surface)
         if original is None:
-            b.tree.links.new(emission.outputs[0], surface)
+            b.tree.links.new(shader, surface)
             continue
-        add = b.node("ShaderNodeAddShader", "BSDF + SH diffuse + SH glossy (EEVEE)")
+        add = b.node("ShaderNodeAddShader", label)
         b.tree.links.new(original, add.inputs[0])
-        b.tree.links.new(emission.outputs[0], add.inputs[1])
+        b.tree.links.new(shader, add.inputs[1])
         b.tree.links.new(add.outputs[0], surface)
-    return True

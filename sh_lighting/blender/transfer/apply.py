@@ -14,7 +14,7 @@ from typing import NamedTuple
 import bpy
 
 from ..shading import materials
-from . import bake, nodes
+from . import bake, bounce, nodes
 
 NODE_MARKER = "sh_lighting_transfer"
 MODES = ("KEEP_BSDF", "EMISSION")
@@ -86,7 +86,8 @@ def apply_keeping_transfer(materials_list, scene, mode):
 
 def use_transfer_group(materials_list):
     """Point the group nodes Apply added to ``materials_list`` at "SH Transfer" (same
-    interface and record) and mark them with ``NODE_MARKER``."""
+    interface and record), mark them with ``NODE_MARKER``, and add the lamps' bounce for
+    EEVEE where the bake has one (``bounce``)."""
     group = None
     for material in materials_list:
         for node in materials.added_nodes(material):
@@ -94,6 +95,7 @@ def use_transfer_group(materials_list):
             node.node_tree = group
             node.label = nodes.GROUP_NAME
             node[NODE_MARKER] = 1
+            bounce.add_to_material(material, node)
 
 
 def remove_transfer_from(materials_list):

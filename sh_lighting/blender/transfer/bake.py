@@ -7,7 +7,9 @@ Color) is that irradiance / π, so T_lm = π · bake of the world Y_lm (``basis`
 face corner in the colour attributes ``ATTRIBUTE_NAMES``, or per texel (``texels``) for meshes
 too coarse to carry a shadow at their corners (``coverage``), with a ``RECORD`` for ``stale``;
 the scene's world, engine, samples and selection are put back, its lights hidden and SH nodes
-muted during the bake. Details: docs/modules.md.
+muted during the bake. With lamps in the scene, a tenth bake (world black, lamps on, Indirect
+only) stores their bounce B (``BOUNCE_ATTRIBUTE``, ``stale.BOUNCE_IMAGE``), which EEVEE lacks:
+its lamps light directly but bounce nothing. Details: docs/modules.md.
 """
 
 import contextlib
@@ -22,9 +24,9 @@ import numpy as np
 
 from ...core.sh import COEFFICIENT_NAMES
 from ..shading import materials
-from . import basis, coverage, nodes, texels
+from . import basis, bounce, coverage, nodes, texels
 from .stale import (  # noqa: F401 (re-exported: the bake's names in one place)
-    ATTRIBUTE_NAMES, IMAGE_NAMES, RECORD, RECORD_VERSION, SCRATCH_NAME, UV_NAME,
+    ATTRIBUTE_NAMES, BOUNCE_ATTRIBUTE, IMAGE_NAMES, RECORD, RECORD_VERSION, SCRATCH_NAME, UV_NAME,
     drop_unused_atlas, evaluated_depsgraph, geometry_fingerprint, has_transfer, missing_parts,
     record, scene_fingerprint, status, view_layer_of,
 )
@@ -134,6 +136,8 @@ def remove_transfer(obj):
     found = stale.remove_transfer(obj)
     if had_atlas and stale.atlas_images() is None and nodes.find_node_group() is not None:
         nodes.ensure_node_group()
+    if had_atlas and stale.atlas_images() is None and bounce.find_group() is not None:
+        bounce.ensure_group()
     return found
 
 
@@ -236,18 +240,33 @@ def _points(info):
     return (info.get("corners") or 0) + (info.get("texels") or 0)
 
 
+def lamps_of(scene):
+    """Names of ``scene``'s lamps that render (their bounce is baked, ``Bake``)."""
+    view_layer = view_layer_of(scene)
+    return [o.name for o in scene.objects if o.type == "LIGHT" and not o.hide_render
+            and o.visible_get(view_layer=view_layer)]
+
+
+def _passes(scene):
+    """The Cycles bakes a bake of ``scene`` makes: the nine basis worlds, and the lamps'
+    bounce when it has lamps."""
+    return len(ATTRIBUTE_NAMES) + (1 if lamps_of(scene) else 0)
+
+
 def estimate_seconds(scene, corners, samples):
-    """Seconds a bake of ``corners`` corners and texels at ``samples`` takes: 9 × (overhead
-    + corners · samples · rate), the rate measured by the scene's last bake if any (its
-    record: its time over its corners and texels), else ``SECONDS_PER_CORNER_SAMPLE``."""
+    """Seconds a bake of ``corners`` corners and texels at ``samples`` takes: passes ×
+    (overhead + corners · samples · rate), the rate measured by the scene's last bake if any
+    (its record: its time over its corners, texels and passes), else
+    ``SECONDS_PER_CORNER_SAMPLE``."""
     rate = SECONDS_PER_CORNER_SAMPLE
     latest = [r for r in (record(o) for o in scene.objects) if r and _points(r)]
     if latest:
         last = max(latest, key=lambda r: r.get("baked", 0))
-        work = _points(last) * last["samples"] * len(ATTRIBUTE_NAMES)
-        measured = (last["seconds"] - len(ATTRIBUTE_NAMES) * SECONDS_PER_BASIS) / work
+        passes = len(ATTRIBUTE_NAMES) + (1 if last.get("bounce") else 0)
+        work = _points(last) * last["samples"] * passes
+        measured = (last["seconds"] - passes * SECONDS_PER_BASIS) / work
         rate = measured if measured > 0 else rate
-    return len(ATTRIBUTE_NAMES) * (SECONDS_PER_BASIS + corners * samples * rate)
+    return _passes(scene) * (SECONDS_PER_BASIS + corners * samples * rate)
 
 
 def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None,
@@ -276,13 +295,11 @@ def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None, error_ta
 
 
 class Bake:
-    """A bake in ``steps`` steps, one basis world each, the user's scene as it was between
-    them: a window's modal operator draws its progress and takes Esc between steps (Cycles'
-    bake itself cannot be stopped from Python). ``finish`` stores the transfer, unless the
-    scene changed meanwhile; ``cancel`` drops what was baked. Nothing is stored before
-    ``finish``."""
-
-    steps = len(ATTRIBUTE_NAMES)
+    """A bake in ``steps`` steps, one basis world each (and the lamps' bounce where the scene
+    has lamps), the user's scene as it was between them: a window's modal operator draws its
+    progress and takes Esc between steps (Cycles' bake itself cannot be stopped from Python).
+    ``finish`` stores the transfer, unless the scene changed meanwhile; ``cancel`` drops what
+    was baked. Nothing is stored before ``finish``."""
 
     def __init__(self, scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None,
                  store="AUTO"):
@@ -305,6 +322,8 @@ class Bake:
                 raise TransferError(f"the file has an image named '{theirs}' that the add-on "
                                     "did not make: rename it to bake per texel")
         self.report = report or (lambda text: None)
+        self.lamps = lamps_of(scene)
+        self.steps = len(ATTRIBUTE_NAMES) + (1 if self.lamps else 0)
         self.started = time.perf_counter()
         if error_target is not None:
             samples, probe_noise = choose_samples(scene, self.picked, error_target,
@@ -330,17 +349,19 @@ class Bake:
     def step(self):
         """Bake the next basis world (the scene prepared for it and restored after)."""
         index = self.done
+        bounce = index == len(ATTRIBUTE_NAMES)
         began = time.perf_counter()
         saved = _Saved(self.scene, self.picked, self.split)
         try:
-            saved.prepare(self.samples)
+            saved.prepare(self.samples, lamps=bounce)
             self.emission_materials |= saved.emission_materials
             self.bakes.append(_bake_basis(self.scene, saved, self.split, index))
             self.texel_seconds += saved.texel_seconds
         finally:
             saved.restore()
         self.basis_seconds.append(time.perf_counter() - began)
-        self.report(f"Transfer {COEFFICIENT_NAMES[index]}: {self.basis_seconds[-1]:.1f} s "
+        what = "the lamps' bounce" if bounce else COEFFICIENT_NAMES[index]
+        self.report(f"Transfer {what}: {self.basis_seconds[-1]:.1f} s "
                     f"({index + 1}/{self.steps})")
 
     def cancel(self):
@@ -364,6 +385,10 @@ class Bake:
                          + ", ".join(sorted(self.emission_materials)))
         seconds = time.perf_counter() - self.started
         split, corners, vertices = self.split, 0, 0
+        bounced = len(self.bakes) > len(ATTRIBUTE_NAMES)
+        if bounced:
+            notes.append(f"the bounce of {len(self.lamps)} lamp(s) is baked too, for EEVEE "
+                         f"(lamps bounce no light there): {', '.join(self.lamps)}")
         for position, obj in enumerate(split.corner_objects):
             transfer = _finite(_transfer([bake[0][position] for bake in self.bakes]), obj, notes)
             _store(obj, transfer)
@@ -394,11 +419,14 @@ class Bake:
                 "corners": corners, "texels": split.atlas.covered if split.atlas else 0,
                 "baked": time.time(), "geometry": geometry_fingerprint(obj, depsgraph),
                 "scene": scene_print, "store": "TEXELS" if per_texel else "CORNERS",
+                "bounce": bounced,
                 "coarse": [line for line in notes if line.startswith(f"'{obj.name}' ")],
             })
         drop_unused_atlas()
         if split.texel_objects or nodes.find_node_group() is not None:
             nodes.ensure_node_group()  # the group reads the atlas only where there is one
+        if bounce.find_group() is not None:
+            bounce.ensure_group()  # its image may be new, or gone
         return BakeInfo([o.name for o in picked], corners, vertices, self.samples, seconds,
                         self.basis_seconds, notes, [o.name for o in split.texel_objects],
                         split.atlas.covered if split.atlas else 0, self.texel_seconds)
@@ -477,27 +505,35 @@ def _drop_texels(obj):
 
 def _transfer(bakes):
     """(9, n, 3) T_lm from the nine bakes (each (n, 3) per corner or texel, basis worlds
-    0-8)."""
+    0-8), and a tenth row B = π · the lamps' bounce bake when there is one."""
     constant = bakes[0]
     rows = [np.pi * basis.CONSTANT_SCALE * constant]
-    for index in range(1, len(bakes)):
+    for index in range(1, len(ATTRIBUTE_NAMES)):
         rows.append(np.pi * (bakes[index] - basis.OFFSETS[index] * constant))
+    rows += [np.pi * bounce for bounce in bakes[len(ATTRIBUTE_NAMES):]]
     return np.stack(rows)
 
 
 def _bake_basis(scene, saved, split, index):
-    """Bake basis world ``index`` into the corner objects' scratch attribute and the texel
-    objects' scratch image; (their RGB per corner object, the atlas's RGB or None)."""
-    world = basis.new_basis_world(index)
+    """Bake basis world ``index`` (index 9: the lamps' bounce, a black world, Indirect only)
+    into the corner objects' scratch attribute and the texel objects' scratch image; (their
+    RGB per corner object, the atlas's RGB or None)."""
+    bounce = index == len(ATTRIBUTE_NAMES)
+    world = basis.new_basis_world(0 if bounce else index)
+    passes = {}
+    if bounce:  # no light from the world: what the lamps give after a bounce
+        world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+        passes = {"pass_filter": {"INDIRECT"}}
     try:
         scene.world = world
         if split.corner_objects:
-            _cycles_bake(scene, saved, split.corner_objects, index, target="VERTEX_COLORS")
+            _cycles_bake(scene, saved, split.corner_objects, index, target="VERTEX_COLORS",
+                         **passes)
         if split.texel_objects:
             began = time.perf_counter()
             _cycles_bake(scene, saved, split.texel_objects, index, target="IMAGE_TEXTURES",
                          uv_layer=SCRATCH_UV, margin=texels.MARGIN, margin_type="EXTEND",
-                         use_clear=False)
+                         use_clear=False, **passes)
             saved.texel_seconds += time.perf_counter() - began
     finally:
         scene.world = saved.world
@@ -517,18 +553,23 @@ def _cycles_bake(scene, saved, objects, index, **options):
         object=objects[0], selected_objects=objects, selected_editable_objects=objects,
     ):
         result = bpy.ops.object.bake(
-            type="DIFFUSE", pass_filter={"DIRECT", "INDIRECT"}, use_selected_to_active=False,
-            **{"margin": 0, "use_clear": True, **options},
+            type="DIFFUSE", use_selected_to_active=False,
+            **{"pass_filter": {"DIRECT", "INDIRECT"}, "margin": 0, "use_clear": True, **options},
         )
     if "FINISHED" not in result:
-        raise TransferError(f"the Cycles bake of {COEFFICIENT_NAMES[index]} was cancelled")
+        what = COEFFICIENT_NAMES[index] if index < len(COEFFICIENT_NAMES) else "the lamps' bounce"
+        raise TransferError(f"the Cycles bake of {what} was cancelled")
 
 
 def _store(obj, transfer):
-    """Write (9, corners, 3) ``transfer`` into the nine attributes (alpha 1)."""
+    """Write (9, corners, 3) ``transfer`` into the nine attributes (alpha 1), a tenth row
+    (the lamps' bounce) into ``BOUNCE_ATTRIBUTE``, which goes when there is none."""
     mesh = obj.data
     rgba = np.ones((transfer.shape[1], 4), dtype=np.float32)
-    for name, values in zip(ATTRIBUTE_NAMES, transfer):
+    old = mesh.color_attributes.get(BOUNCE_ATTRIBUTE)
+    if old is not None and len(transfer) == len(ATTRIBUTE_NAMES):
+        mesh.color_attributes.remove(old)
+    for name, values in zip(ATTRIBUTE_NAMES + (BOUNCE_ATTRIBUTE,), transfer):
         attribute = mesh.color_attributes.get(name)
         if attribute is not None and (attribute.domain != "CORNER"
                                       or attribute.data_type != "FLOAT_COLOR"):
@@ -562,7 +603,9 @@ class _Saved:
         self.emission_materials = set()
         self.lamps = []  # names of the lights hidden for the bake
 
-    def prepare(self, samples):
+    def prepare(self, samples, lamps=False):
+        """The scene as a bake sees it: Cycles, ``samples``, the scratch targets, the SH nodes
+        muted, the lamps hidden unless ``lamps`` (the bounce bake)."""
         self.scene.render.engine = "CYCLES"
         cycles = self.scene.cycles
         cycles.samples = samples
@@ -578,7 +621,7 @@ class _Saved:
                 texels.set_uv(obj, uv, SCRATCH_UV)
             self.target = texels.BakeTarget(self.split.texel_objects, self.split.atlas.size)
         for obj in self.scene.objects:
-            if obj.type == "LIGHT" and not obj.hide_render:
+            if obj.type == "LIGHT" and not obj.hide_render and not lamps:
                 obj.hide_render = True
                 self.lamps.append(obj.name)
         for material in bpy.data.materials:

@@ -26,6 +26,11 @@ RECORD = "sh_transfer"
 UV_NAME = "sh_transfer_uv"
 IMAGE_NAMES = tuple(f"SH Transfer {name[3:]}" for name in ATTRIBUTE_NAMES)  # SH Transfer T00
 IMAGE_MARKER = "sh_lighting_transfer_image"
+# The lamps' bounce B (EEVEE only: its lamps light directly but bounce nothing): the
+# irradiance the scene's lamps give after at least one bounce, per corner or per texel.
+BOUNCE_ATTRIBUTE = "sh_TB"
+BOUNCE_IMAGE = "SH Transfer TB"
+BOUNCE_MARKER = len(IMAGE_NAMES)  # its IMAGE_MARKER value
 SCRATCH_NAME = "sh_transfer_bake"  # the attribute Cycles bakes into, removed after each bake
 RECORD_VERSION = 2
 RENDERED_TYPES = {"MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES", "POINTCLOUD", "VOLUME"}
@@ -202,6 +207,14 @@ def atlas_images():
     return found
 
 
+def bounce_image():
+    """The atlas's bounce image (the add-on's: local, marked) or None."""
+    image = bpy.data.images.get(BOUNCE_IMAGE)
+    if image is None or image.library is not None or image.get(IMAGE_MARKER) != BOUNCE_MARKER:
+        return None
+    return image
+
+
 def missing_parts(obj, info):
     """What of ``obj``'s bake (record ``info``) is gone: a phrase, or None."""
     if info.get("store") == "TEXELS":
@@ -220,7 +233,8 @@ def has_transfer(obj):
     if obj.get(RECORD) is not None:
         return True
     return obj.type == "MESH" and (obj.data.uv_layers.get(UV_NAME) is not None or any(
-        obj.data.color_attributes.get(n) is not None for n in ATTRIBUTE_NAMES + (SCRATCH_NAME,)))
+        obj.data.color_attributes.get(n) is not None
+        for n in ATTRIBUTE_NAMES + (BOUNCE_ATTRIBUTE, SCRATCH_NAME)))
 
 
 def remove_transfer(obj):
@@ -231,7 +245,7 @@ def remove_transfer(obj):
     if RECORD in obj:
         del obj[RECORD]
     if obj.type == "MESH":
-        for name in ATTRIBUTE_NAMES + (SCRATCH_NAME,):
+        for name in ATTRIBUTE_NAMES + (BOUNCE_ATTRIBUTE, SCRATCH_NAME):
             attribute = obj.data.color_attributes.get(name)
             if attribute is not None:
                 obj.data.color_attributes.remove(attribute)
@@ -251,7 +265,7 @@ def drop_unused_atlas():
     is baked per texel."""
     if any((record(o) or {}).get("store") == "TEXELS" for o in bpy.data.objects):
         return
-    for index, name in enumerate(IMAGE_NAMES):
+    for index, name in enumerate(IMAGE_NAMES + (BOUNCE_IMAGE,)):
         image = bpy.data.images.get(name)
         if image is not None and image.library is None and image.get(IMAGE_MARKER) == index:
             bpy.data.images.remove(image)

@@ -12,7 +12,7 @@ import numpy as np
 
 from ...core import lightmap
 from ..data import compat
-from .stale import IMAGE_MARKER, IMAGE_NAMES, RECORD, UV_NAME, record
+from .stale import BOUNCE_IMAGE, IMAGE_MARKER, IMAGE_NAMES, RECORD, UV_NAME, record
 
 SCRATCH_IMAGE = "SH Transfer bake (temporary)"
 SCRATCH_NODE = "sh_transfer_bake_target"
@@ -101,7 +101,7 @@ def fill_hidden(transfer, constant, size):
 
 def foreign_image():
     """The name of an image not the add-on's that has an atlas image's name, or None."""
-    for index, name in enumerate(IMAGE_NAMES):
+    for index, name in enumerate(IMAGE_NAMES + (BOUNCE_IMAGE,)):
         image = bpy.data.images.get(name)
         if image is not None and (image.library is not None or image.get(IMAGE_MARKER) != index):
             return name
@@ -109,11 +109,17 @@ def foreign_image():
 
 
 def store(transfer, size):
-    """Write (9, size², 3) ``transfer`` into the nine atlas images (made or resized), packed
+    """Write (9, size², 3) ``transfer`` into the nine atlas images (made or resized), and a
+    tenth row, the lamps' bounce, into ``BOUNCE_IMAGE`` (deleted when there is none), packed
     in the .blend as float EXR; the images."""
     stored = []
     rgba = np.ones((size * size, 4), dtype=np.float32)
-    for index, (name, values) in enumerate(zip(IMAGE_NAMES, transfer)):
+    names = IMAGE_NAMES + (BOUNCE_IMAGE,)
+    if len(transfer) == len(IMAGE_NAMES):
+        old = bpy.data.images.get(BOUNCE_IMAGE)  # the add-on's (``foreign_image`` checked)
+        if old is not None:
+            bpy.data.images.remove(old)
+    for index, (name, values) in enumerate(zip(names, transfer)):
         image = bpy.data.images.get(name)  # the add-on's (``foreign_image`` checked first)
         if image is not None and tuple(image.size) != (size, size):
             bpy.data.images.remove(image)
