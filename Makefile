@@ -64,6 +64,7 @@ bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_world_edit
 	$(PY) -m benchmarks.bench_eevee_default
 	$(PY) -m benchmarks.bench_texel
+	$(PY) -m benchmarks.bench_eevee_raytracing
 	$(PY) -m benchmarks.bench_compile
 	$(PY) -m benchmarks.bench_sizes
 	$(PY) -m benchmarks.bench_photo

@@ -3,8 +3,9 @@ per texel, against Cycles' own world lighting.
 
 The scene of ``bench_eevee_default`` (a plain 8 m floor, a cube, a UV sphere, a Suzanne) under
 real HDRIs; reference: Cycles path tracing of the world, ``REFERENCE_SAMPLES``. Rows, Cycles at
-64 spp: the world itself (no add-on); Transfer + Extract Lights (2) in Keep BSDF, baked per
-corner ("CORNERS") and by Default ("AUTO": the floor per texel). Relative RMSE over the floor
+64 spp: the world itself (no add-on); Extract Lights (2), then Transfer in Keep BSDF, baked
+per corner ("CORNERS") and by Default ("AUTO": the floor per texel), with the lamps' bounce
+(EEVEE's rows use it). Relative RMSE over the floor
 and objects and over the floor's contact region, brightness, bake time. Writes its fragment of
 benchmarks/REPORT.md ("texel").
 """
@@ -61,28 +62,26 @@ def measure(hdri, folder, reference_samples, eevee=False):
         rows.append(_row("EEVEE, world (no add-on)", image, reference, masks, seconds))
     notes = []
     for store in ("CORNERS", "AUTO"):
+        # As an artist works: Extract Lights, then the bake (which bakes the lamps' bounce
+        # for EEVEE), then Apply
+        lights = api.extract_lights(scene, count=LIGHTS)
         info = bake.bake_transfer(scene, objects, samples=BAKE_SAMPLES, store=store)
         notes.append(f"{store}: {info.corners} corners, {info.texels} texels "
                      f"({', '.join(info.texel_objects) or 'none'} per texel), "
-                     f"{info.seconds:.1f} s")
-        lights = api.extract_lights(scene, count=LIGHTS)
+                     f"{len(info.basis_seconds)} bakes, {info.seconds:.1f} s")
         transfer_apply.apply_transfer(objects, scene, "KEEP_BSDF")
         seconds, image = _render(scene, f"{stem}_{store}.exr", "CYCLES", SAMPLES, seed=2)
-        materials.remove_from_materials(materials.materials_of(objects))
-        api.compute_from_world(scene)  # deletes the extracted lights
         label = "per corner" if store == "CORNERS" else "Default: the floor per texel"
         rows.append(_row(f"Transfer ({label}) + Extract Lights ({len(lights.lights)}), "
                          f"{SAMPLES} spp", image, reference, masks, seconds, info.seconds))
         if eevee and store == "AUTO":
-            lights = api.extract_lights(scene, count=LIGHTS)
-            transfer_apply.apply_transfer(objects, scene, "KEEP_BSDF")
             seconds, image = _render(scene, f"{stem}_eevee_{store}.exr",
                                      compat.eevee_engine_id())
-            materials.remove_from_materials(materials.materials_of(objects))
-            api.compute_from_world(scene)
-            rows.append(_row(f"EEVEE Transfer ({label}) + Extract Lights "
-                             f"({len(lights.lights)})", image, reference, masks, seconds,
+            rows.append(_row(f"EEVEE Transfer ({label}, the lamps' bounce baked) + Extract "
+                             f"Lights ({len(lights.lights)})", image, reference, masks, seconds,
                              info.seconds))
+        materials.remove_from_materials(materials.materials_of(objects))
+        api.compute_from_world(scene)  # deletes the extracted lights
         for obj in objects:
             bake.remove_transfer(obj)
     for row in rows:

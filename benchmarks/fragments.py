@@ -18,7 +18,8 @@ WIDTH = 100
 # Written by: report.py (methods), by hand (node_group, *_reading), bench_lights (lights),
 # bench_transfer (transfer, transfer_equal_error), bench_photo (photo), bench_sizes (sizes),
 # bench_real_scene (real_scene), bench_world_edit (world_edit), bench_eevee_default
-# (eevee_default), bench_compile (compile), the commands' benchmark (commands), bench_near_field (near_field).
+# (eevee_default), bench_compile (compile), bench_eevee_raytracing (eevee_raytracing), the
+# commands' benchmark (commands), bench_near_field (near_field).
 ORDER = (
     "methods",
     "node_group",
@@ -29,6 +30,8 @@ ORDER = (
     "transfer_reading",
     "texel",
     "texel_reading",
+    "eevee_raytracing",
+    "eevee_raytracing_reading",
     "photo",
     "sizes",
     "sizes_reading",
