@@ -2,8 +2,8 @@
 
 Custom properties that an Attribute node reads at render time in any Blender: c_lm in
 ``scene["sh_L00"]`` ... ``["sh_L22"]`` (RGB), the gains s_lm in ``["sh_L00_gain"]`` ... (read
-through three driven copies, ``gain_packs``), the lighting L_lm = s_lm · c_lm; ``["sh_computed"]`` the Reset values, ``["sh_provenance"]`` where
-the values came from. ``store`` validates, writes c = coeffs and s = 1 (or c only, ``gains=
+through three driven copies, ``gain_packs``), the lighting L_lm = s_lm · c_lm;
+``["sh_computed"]`` the Reset values, ``["sh_provenance"]`` where the values came from. ``store`` validates, writes c = coeffs and s = 1 (or c only, ``gains=
 "KEEP"``), follows the ``animation`` policy (KEY, CLEAR, REFUSE) over animated properties,
 records the provenance, tags the depsgraph, and returns a ``Stored`` array whose ``note`` says
 what it did about animation. The properties and the policy in detail: docs/modules.md.
@@ -166,9 +166,9 @@ def problems(scene):
 def repair(scene):
     """Write a valid value over every invalid, unanimated coefficient or gain property: a
     gain 1, a channel its Reset value (the last computed from the world) or 0; broken packs
-    of the gains are made again (``gain_packs.ensure``). Returns the
-    names repaired; a PropertyError, nothing changed, when an invalid one is animated (its
-    keyframes or driver would write it again)."""
+    of the gains are made again (``gain_packs.ensure``). Returns the names repaired; a
+    PropertyError, nothing changed, when an invalid one is animated (its keyframes or driver
+    would write it again)."""
     bad = [name for name, _message in problems(scene) if name not in gain_packs.PACK_NAMES]
     animated_bad = {name: how for name, how in animated(scene, bad).items()}
     if animated_bad:

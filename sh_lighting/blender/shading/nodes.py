@@ -49,18 +49,18 @@ ZERO_NORMAL_SQUARED = 1e-12
 ATTRIBUTE_VECTOR, ATTRIBUTE_FAC = 1, 2
 
 
-def is_sh_group(tree):
-    """True for a node group built by this module."""
-    return getattr(tree, "bl_idname", "") == "ShaderNodeTree" and GROUP_MARKER in tree
+def find_marked_group(marker, name):
+    """The file's local shader node group carrying custom property ``marker``, the one named
+    ``name`` first (then by name), or None: how each of the add-on's groups is found."""
+    found = [tree for tree in bpy.data.node_groups if tree.library is None
+             and tree.bl_idname == "ShaderNodeTree" and marker in tree]
+    found.sort(key=lambda tree: (tree.name != name, tree.name))
+    return found[0] if found else None
 
 
 def find_node_group():
     """The local SH group of this file or None; "SH Irradiance" itself is preferred."""
-    found = [
-        tree for tree in bpy.data.node_groups if tree.library is None and is_sh_group(tree)
-    ]
-    found.sort(key=lambda tree: (tree.name != GROUP_NAME, tree.name))
-    return found[0] if found else None
+    return find_marked_group(GROUP_MARKER, GROUP_NAME)
 
 
 def ensure_node_group():

@@ -247,10 +247,10 @@ def lamps_of(scene):
             and o.visible_get(view_layer=view_layer)]
 
 
-def _passes(scene):
-    """The Cycles bakes a bake of ``scene`` makes: the nine basis worlds, and the lamps'
-    bounce when it has lamps."""
-    return len(ATTRIBUTE_NAMES) + (1 if lamps_of(scene) else 0)
+def _passes(lamps):
+    """The Cycles bakes a bake makes: the nine basis worlds, and the bounce of ``lamps``
+    (names, ``lamps_of``) when there are any."""
+    return len(ATTRIBUTE_NAMES) + (1 if lamps else 0)
 
 
 def estimate_seconds(scene, corners, samples):
@@ -262,11 +262,11 @@ def estimate_seconds(scene, corners, samples):
     latest = [r for r in (record(o) for o in scene.objects) if r and _points(r)]
     if latest:
         last = max(latest, key=lambda r: r.get("baked", 0))
-        passes = len(ATTRIBUTE_NAMES) + (1 if last.get("bounce") else 0)
+        passes = _passes(last.get("bounce"))
         work = _points(last) * last["samples"] * passes
         measured = (last["seconds"] - passes * SECONDS_PER_BASIS) / work
         rate = measured if measured > 0 else rate
-    return _passes(scene) * (SECONDS_PER_BASIS + corners * samples * rate)
+    return _passes(lamps_of(scene)) * (SECONDS_PER_BASIS + corners * samples * rate)
 
 
 def bake_transfer(scene, objects, samples=DEFAULT_SAMPLES, report=None, error_target=None,
@@ -323,7 +323,7 @@ class Bake:
                                     "did not make: rename it to bake per texel")
         self.report = report or (lambda text: None)
         self.lamps = lamps_of(scene)
-        self.steps = len(ATTRIBUTE_NAMES) + (1 if self.lamps else 0)
+        self.steps = _passes(self.lamps)
         self.started = time.perf_counter()
         if error_target is not None:
             samples, probe_noise = choose_samples(scene, self.picked, error_target,
@@ -349,18 +349,18 @@ class Bake:
     def step(self):
         """Bake the next basis world (the scene prepared for it and restored after)."""
         index = self.done
-        bounce = index == len(ATTRIBUTE_NAMES)
+        lamps_pass = index == len(ATTRIBUTE_NAMES)
         began = time.perf_counter()
         saved = _Saved(self.scene, self.picked, self.split)
         try:
-            saved.prepare(self.samples, lamps=bounce)
+            saved.prepare(self.samples, lamps=lamps_pass)
             self.emission_materials |= saved.emission_materials
             self.bakes.append(_bake_basis(self.scene, saved, self.split, index))
             self.texel_seconds += saved.texel_seconds
         finally:
             saved.restore()
         self.basis_seconds.append(time.perf_counter() - began)
-        what = "the lamps' bounce" if bounce else COEFFICIENT_NAMES[index]
+        what = "the lamps' bounce" if lamps_pass else COEFFICIENT_NAMES[index]
         self.report(f"Transfer {what}: {self.basis_seconds[-1]:.1f} s "
                     f"({index + 1}/{self.steps})")
 
@@ -510,7 +510,7 @@ def _transfer(bakes):
     rows = [np.pi * basis.CONSTANT_SCALE * constant]
     for index in range(1, len(ATTRIBUTE_NAMES)):
         rows.append(np.pi * (bakes[index] - basis.OFFSETS[index] * constant))
-    rows += [np.pi * bounce for bounce in bakes[len(ATTRIBUTE_NAMES):]]
+    rows += [np.pi * lamps for lamps in bakes[len(ATTRIBUTE_NAMES):]]
     return np.stack(rows)
 
 
@@ -518,10 +518,10 @@ def _bake_basis(scene, saved, split, index):
     """Bake basis world ``index`` (index 9: the lamps' bounce, a black world, Indirect only)
     into the corner objects' scratch attribute and the texel objects' scratch image; (their
     RGB per corner object, the atlas's RGB or None)."""
-    bounce = index == len(ATTRIBUTE_NAMES)
-    world = basis.new_basis_world(0 if bounce else index)
+    lamps_pass = index == len(ATTRIBUTE_NAMES)
+    world = basis.new_basis_world(0 if lamps_pass else index)
     passes = {}
-    if bounce:  # no light from the world: what the lamps give after a bounce
+    if lamps_pass:  # no light from the world: what the lamps give after a bounce
         world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
         passes = {"pass_filter": {"INDIRECT"}}
     try:

@@ -10,11 +10,12 @@ Material Output only (``glossy.add_for_eevee``): Cycles bounces the lamps itself
 """
 
 import json
+from math import pi
 
 import bpy
 
 from ..shading import glossy, keep_bsdf, materials
-from ..shading.nodes import Builder
+from ..shading.nodes import Builder, find_marked_group
 from .stale import BOUNCE_ATTRIBUTE, UV_NAME, bounce_image, record
 
 GROUP_NAME = "SH Lamp Bounce (EEVEE)"
@@ -27,10 +28,7 @@ DESCRIPTION = ("The light of the scene's lamps after a bounce, baked by Cycles (
 
 
 def find_group():
-    found = [t for t in bpy.data.node_groups
-             if t.library is None and t.bl_idname == "ShaderNodeTree" and GROUP_MARKER in t]
-    found.sort(key=lambda tree: (tree.name != GROUP_NAME, tree.name))
-    return found[0] if found else None
+    return find_marked_group(GROUP_MARKER, GROUP_NAME)
 
 
 def ensure_group():
@@ -63,7 +61,7 @@ def ensure_group():
     b.link(bounce, lit.inputs[1])
     scaled = b.vector_math("SCALE", 4, 0, "/ π")
     b.link(lit.outputs["Vector"], scaled.inputs[0])
-    scaled.inputs["Scale"].default_value = 1.0 / 3.141592653589793
+    scaled.inputs["Scale"].default_value = 1.0 / pi
     emission = b.node("ShaderNodeEmission", 5, 0)
     b.link(scaled.outputs["Vector"], emission.inputs["Color"])
     group_out = b.node("NodeGroupOutput", 6, 0)

@@ -16,6 +16,7 @@ from ..shading.nodes import (
     Builder,
     diffuse_outputs,
     ensure_interface,
+    find_marked_group,
     lighting_readers,
     readable_everywhere,
 )
@@ -31,14 +32,8 @@ DESCRIPTION = (
 )
 
 
-def is_transfer_group(tree):
-    return getattr(tree, "bl_idname", "") == "ShaderNodeTree" and GROUP_MARKER in tree
-
-
 def find_node_group():
-    found = [t for t in bpy.data.node_groups if t.library is None and is_transfer_group(t)]
-    found.sort(key=lambda tree: (tree.name != GROUP_NAME, tree.name))
-    return found[0] if found else None
+    return find_marked_group(GROUP_MARKER, GROUP_NAME)
 
 
 def ensure_node_group():

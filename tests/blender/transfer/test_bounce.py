@@ -12,11 +12,13 @@ import bpy
 import numpy as np
 import pytest
 import transfer_scenes as ts
+from blender_scenes import run_execute
 
 from sh_lighting.blender.data import compat
 from sh_lighting.blender.shading import materials
 from sh_lighting.blender.transfer import apply as transfer_apply
 from sh_lighting.blender.transfer import bake, bounce, stale
+from sh_lighting.blender.ui import operators
 
 SUN_STRENGTH = 4.0
 
@@ -99,3 +101,17 @@ def test_remove_takes_the_bounce_out_and_emission_only_gets_none(addon):
     assert sorted(transfer_apply.delete_bakes([ground, box])) == sorted([ground.name, box.name])
     assert box.data.color_attributes.get(stale.BOUNCE_ATTRIBUTE) is None
     assert bpy.data.images.get(stale.BOUNCE_IMAGE) is None
+
+
+def test_the_default_apply_in_eevee_bakes_and_adds_the_bounce(addon):
+    """As an artist: a Sun in the scene, EEVEE, Apply in the default mode, objects selected."""
+    scene, ground, box, _sun = _scene_with_sun()
+    scene.render.engine = compat.eevee_engine_id()
+    for obj in (ground, box):
+        obj.select_set(True)
+    assert scene.sh_lighting.apply_mode == "AUTO"
+    result, reports = run_execute(operators.SHLIGHT_OT_apply)
+    assert result == {"FINISHED"}, reports
+    assert bake.record(box)["bounce"] is True and bake.record(ground)["bounce"] is True
+    (node,) = _bounce_nodes(box.data.materials[0])
+    assert node.outputs["Shader"].is_linked
