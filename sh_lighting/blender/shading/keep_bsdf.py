@@ -2,8 +2,8 @@
 
 albedo = Σ_leaves Π_path (Fac or 1 − Fac) · colour · w over the diffuse leaves of the Surface
 (``diffuse_weight.surface_leaves``): w = 1 for a Diffuse BSDF; for a Principled BSDF
-w = Alpha · (1 − Metallic) · (1 − Transmission Weight) · (1 − F0), F0 = ((η − 1)/(η + 1))²
-(left out in "EMISSION"), as Cycles layers it. Each input is linked to the same source, or to
+w = Alpha · (1 − Metallic) · (1 − Transmission Weight) · (1 − F0), F0 = ((η − 1)/(η + 1))² · 2 s
+with s the Specular IOR Level (left out in "EMISSION"), as Cycles layers it. Each input is linked to the same source, or to
 a Value/RGB node holding its value (with its keyframes and drivers) that feeds both the BSDF
 and the SH term; ``release`` puts the values back. Details: docs/modules.md.
 """
@@ -103,14 +103,20 @@ def _leaf_factors(b, leaf, with_specular):
 
 
 def dielectric_f0(b, bsdf, label="SH diffuse weight"):
-    """An output socket of F0 = ((η − 1)/(η + 1))² of Principled ``bsdf``'s IOR η (followed),
-    or None when it has no IOR input."""
+    """An output socket of F0 = min(((η − 1)/(η + 1))² · 2 s, 1) of Principled ``bsdf``'s IOR
+    η and Specular IOR Level s (followed; s = 0.5 leaves F0 as the IOR gives it, 0 takes the
+    reflection away, as Cycles scales it), or None when it has no IOR input."""
     ior = bsdf.inputs.get("IOR")
     if ior is None:
         return None
     ratio = b.math("DIVIDE", b.math("SUBTRACT", ("follow", ior), 1.0, label=label),
                    b.math("ADD", ("follow", ior), 1.0, label=label), label=label)
-    return b.math("POWER", ratio, 2.0, label=label)
+    f0 = b.math("POWER", ratio, 2.0, label=label)
+    level = bsdf.inputs.get("Specular IOR Level")
+    if level is None:
+        return f0
+    return b.math("MULTIPLY", f0, b.math("MULTIPLY", ("follow", level), 2.0, label=label),
+                  label=label, clamp=True)
 
 
 def albedo(material, leaves, with_specular, added, held, builder=None):

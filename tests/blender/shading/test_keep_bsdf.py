@@ -132,6 +132,20 @@ def test_glossy_sphere_keeps_its_reflections(gradient, ior, bound):
     assert keep < bound and emission > 2.5 * keep
 
 
+@pytest.mark.slow
+def test_no_specular_layer_matches_path_tracing(gradient):
+    """Specular IOR Level 0 takes the specular layer away in Cycles: the whole base is diffuse
+    and KEEP_BSDF matches path tracing (it rendered 4 % dark with F0 from the IOR alone)."""
+    s = gradient
+    s.plane.hide_render = s.sun.hide_render = True
+    matte = principled_material("Matte", Roughness=0.5, Specular_IOR_Level=0.0)
+    s.sphere.data.materials[0] = matte
+    keep, emission, noise = _apply_and_compare(s, [matte])
+    print(f"\nPrincipled, Specular IOR Level 0: KEEP_BSDF vs path tracing {keep:.4f}, "
+          f"emission only {emission:.4f}, noise {noise:.4f}")
+    assert keep < 0.01
+
+
 def test_material_without_sh_gets_the_sun_only(studio):
     """Documented: a material left out receives lamps (and light bounced off SH objects) but
     no diffuse light from the world, whose diffuse visibility is off."""
@@ -204,6 +218,30 @@ def test_principled_weight_follows_metallic_transmission_and_ior(studio):
     assert ratio == pytest.approx(expected, rel=3e-3 if LTS else 1e-5)
     with pytest.raises(ValueError, match="unknown Apply mode"):
         materials.apply_to_materials([material], s.scene, mode="SOMETHING")
+
+
+# 4.2 renders the weight 0.2 % above (the test above)
+@pytest.mark.parametrize("level", [0.0, 0.25, 1.0])
+def test_principled_weight_follows_the_specular_ior_level(studio, level):
+    """Cycles scales F0 by 2 × Specular IOR Level; the diffuse weight is 1 − that F0."""
+    s = studio
+    material = principled_material("P", IOR=1.5, Specular_IOR_Level=level)
+    s.sphere.data.materials[0] = material
+    materials.apply_to_materials([material], s.scene)
+    s.sun.hide_render = s.plane.hide_render = True
+    s.world.cycles_visibility.glossy = s.world.cycles_visibility.transmission = False
+    s.sphere.visible_glossy = s.sphere.visible_transmission = False
+    _, image = s.render(1)
+    mask = covered(image)
+    white_material = principled_material("White")
+    s.sphere.data.materials[0] = white_material
+    materials.apply_to_materials([white_material], s.scene, mode="EMISSION")
+    _, white = s.render(1)
+    ratio = image[mask][:, :3].sum() / white[mask][:, :3].sum()
+    expected = 1.0 - 0.04 * 2.0 * level
+    print(f"\nSpecular IOR Level {level}: diffuse weight rendered {ratio:.5f}, expected "
+          f"{expected:.5f}")
+    assert ratio == pytest.approx(expected, rel=3e-3 if LTS else 1e-5)
 
 
 def test_the_worlds_prefiltered_maps_follow_compute_and_go_with_remove(addon, hdri_dir,
