@@ -29,7 +29,8 @@ from .sh import spread_normals
 MAX_COUNT = 8  # lights an extraction may make at most
 CONTRAST = 20.0  # a source's peak: this many times the map's (median) background level
 PEAK_FRACTION = 0.05  # its region: texels above this fraction of its peak
-MAX_RADIUS = np.radians(12.0)  # it fits within this angle of its centre
+MAX_RADIUS = np.radians(30.0)  # it fits within this angle of its centre (bench_texel: 12°
+# left sunrise's 27° glow in the SH, whose shadow is soft where Cycles' is sharp)
 LARGEST_RADIUS = np.radians(60.0)  # the largest max_radius accepted
 MIN_POWER_FRACTION = 0.01  # and carries at least this share of the map's power
 MEDIAN_SORT_LIMIT = 1 << 20  # maps with more texels find the background's median by a bracket

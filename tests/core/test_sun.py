@@ -16,6 +16,7 @@ from sh_lighting.core.sh import sh_basis
 from sh_lighting.core.irradiance import irradiance, reference_irradiance, total_power
 from sh_lighting.core.lights import (
     CONTRAST_LOW,
+    NO_GAIN,
     TOO_DIM,
     TOO_LARGE,
     Light,
@@ -158,11 +159,17 @@ def test_no_light_in_a_smooth_map():
 
 
 def test_no_light_when_the_bright_area_is_large():
-    pixels, _ = sky_with_disc([0.3, 0.8, 0.5], radius_deg=12.0, radiance=300.0)
+    pixels, _ = sky_with_disc([0.3, 0.8, 0.5], radius_deg=32.0, radiance=300.0)
     extraction = extract_lights(pixels, 1)  # a window, not a sun: wider than MAX_RADIUS
     assert extraction.lights == [] and extraction.stop_kind == TOO_LARGE
-    assert "wider than the size limit of 24°" in extraction.stop
-    assert one_light(pixels, max_radius=np.radians(15.0)).power_fraction > 0.8
+    assert "wider than the size limit of 60°" in extraction.stop
+    # within a wider limit it is a candidate, but a 64° disc lit as a Sun would not lower the
+    # error: it stays in the SH
+    assert extract_lights(pixels, 1, max_radius=np.radians(35.0)).stop_kind == NO_GAIN
+    # a 24° window: a light by default (it was left in the SH by the 24° of before)
+    window, _ = sky_with_disc([0.3, 0.8, 0.5], radius_deg=12.0, radiance=300.0)
+    assert one_light(window).power_fraction > 0.8
+    assert extract_lights(window, 1, max_radius=np.radians(12.0)).stop_kind == TOO_LARGE
     with pytest.raises(ValueError, match="size limit must be above 0° and at most 120°"):
         extract_lights(pixels, 1, max_radius=np.radians(61.0))
 

@@ -24,6 +24,9 @@ from ...core.world_map import to_world_direction
 from ..data import compat, scene_data
 from ..world import reader
 
+# Records without a size limit were written when every extraction used 24° across.
+OLD_SIZE_LIMIT = float(np.radians(24.0))
+
 
 @dataclass(frozen=True)
 class Source:
@@ -52,7 +55,7 @@ def extracted_sources(scene, world):
     if not isinstance(source, reader.ImageSource) or source.projection != "EQUIRECTANGULAR":
         return [], None
     pixels = source.pixels()
-    size_limit = float(record.get("size_limit", 2.0 * float(core_lights.MAX_RADIUS)))
+    size_limit = float(record.get("size_limit", OLD_SIZE_LIMIT))
     weights = luminance()
     extraction = core_lights.extract_lights(pixels, len(names), record.get("error_target"),
                                              max_radius=0.5 * size_limit, luminance=weights)

@@ -352,8 +352,8 @@ def window_map(height=128, width=256, radiance=32.5):
 
 
 def test_a_bright_window_is_reported_with_what_would_take_it(addon, tmp_path):
-    """The window is larger than the size limit: the report says so, and
-    raising Size Limit takes it out."""
+    """The window is larger than a Size Limit of 24°: the report says so, and raising Size
+    Limit takes it out; the default (60°) does."""
     scene = bpy.context.scene
     pixels, window = window_map()
     solid = texel_solid_angles(*window.shape)[:, None]
@@ -363,13 +363,16 @@ def test_a_bright_window_is_reported_with_what_would_take_it(addon, tmp_path):
     environment_world(scene, write_exr(tmp_path / "window.exr", pixels), 1.0)
     result, reports = run_execute(lights_ui.SHLIGHT_OT_extract_lights, count=3,
                                   use_error_target=False, error_target=0.5,
-                                  size_limit=lights.SIZE_LIMIT)
+                                  size_limit=math.radians(24.0))
     [(kind, message)] = reports
     print(f"\n{message}")
     assert result == {"FINISHED"} and kind == {"INFO"} and lights_in(scene) == []
     assert "from 'window.exr'" in message and "no light extracted" in message
     assert "wider than the size limit of 24°" in message
     assert "set Size Limit to 34° or more to extract it as a light, or leave it in the SH" in message
+    assert lights.SIZE_LIMIT == pytest.approx(math.radians(60.0))
+    default = api.extract_lights(scene, count=3)
+    assert len(default.lights) >= 1 and default.extraction.lights[0].power_fraction > 0.45
     wider = api.extract_lights(scene, count=3, size_limit=math.radians(34.0))
     print(wider.report())
     assert len(wider.lights) >= 1 and wider.extraction.lights[0].power_fraction > 0.45

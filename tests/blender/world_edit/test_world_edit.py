@@ -460,3 +460,25 @@ def test_remove_restores_reroutes_muted_links_and_plain_colours(addon, tmp_path)
     assert tuple(node.inputs["Color"].default_value) == pytest.approx((0.2, 0.3, 0.4, 1.0))
     assert world_edit.remove(world) and _tree_state(world) == before
     assert tuple(background.inputs["Color"].default_value) == pytest.approx((0.2, 0.3, 0.4, 1.0))
+
+
+def test_a_record_without_a_size_limit_finds_its_sources_at_24_degrees(addon, tmp_path):
+    """Extractions recorded before the size limit was stored all used 24° across: Edit World
+    looks for the sources of such a record at 24°, not at the default of today (60°)."""
+    from sh_lighting.blender.design import lights as design_lights
+    from sh_lighting.blender.world_edit import lights as edit_lights
+    from sh_lighting.core.equirect import texel_directions
+
+    scene, world, _ = _scene(tmp_path)
+    pixels, _ = sunny_map()
+    toward = np.array([-0.6, 0.5, 0.62]) / np.linalg.norm([-0.6, 0.5, 0.62])
+    window = texel_directions(*pixels.shape[:2]) @ toward > math.cos(math.radians(14.0))
+    pixels[window] += np.float32(60.0)  # a window 28° across
+    path = str(tmp_path / "window.exr")
+    write_exr(path, pixels)
+    world.node_tree.nodes["Environment Texture"].image = bpy.data.images.load(path)
+    info = design_lights.extract_lights(scene, count=2)
+    assert len(info.lights) == 2  # the sun and the window
+    assert len(edit_lights.extracted_sources(scene, world)[0]) == 2
+    del scene[scene_data.COMPUTED_PROVENANCE_PROPERTY]["size_limit"]
+    assert len(edit_lights.extracted_sources(scene, world)[0]) == 1  # the sun only
