@@ -63,7 +63,7 @@ bench: $(BENCH_STAMP)
 	$(PY) -m benchmarks.bench_real_scene
 	$(PY) -m benchmarks.bench_world_edit
 	$(PY) -m benchmarks.bench_eevee_default
-	$(PY) -m benchmarks.bench_texel
+	$(PY) -m benchmarks.bench_texel --eevee
 	$(PY) -m benchmarks.bench_eevee_raytracing
 	$(PY) -m benchmarks.bench_compile
 	$(PY) -m benchmarks.bench_sizes

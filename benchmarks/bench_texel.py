@@ -2,8 +2,9 @@
 per texel, against Cycles' own world lighting.
 
 The scene of ``bench_eevee_default`` (a plain 8 m floor, a cube, a UV sphere, a Suzanne) under
-real HDRIs; reference: Cycles path tracing of the world, ``REFERENCE_SAMPLES``. Rows, Cycles at
-64 spp: the world itself (no add-on); Extract Lights (2), then Transfer in Keep BSDF, baked
+real HDRIs (or HDRI files, e.g. Probulator's probes), rendered at ``SIZE``; reference: Cycles
+path tracing of the world, ``REFERENCE_SAMPLES``. Rows, Cycles at 64 spp: the world itself (no
+add-on); Extract Lights (``LIGHTS``), then Transfer in Keep BSDF, baked
 per corner ("CORNERS") and by Default ("AUTO": the floor per texel), with the lamps' bounce
 (EEVEE's rows use it). Relative RMSE over the floor
 and objects and over the floor's contact region, brightness, bake time. Writes its fragment of
@@ -34,7 +35,8 @@ HDRIS = ("sunrise", "forest", "courtyard")
 REFERENCE_SAMPLES = 1024
 SAMPLES = 64
 BAKE_SAMPLES = 64
-LIGHTS = 2
+LIGHTS = 3  # Extract Lights' count (the API's default; sunrise's third is its 27° glow)
+SIZE = (160, 100)  # pixels: the contact region is ~150 of them (22 at bench_eevee_default's size)
 
 
 def _row(name, image, reference, masks, seconds, bake_seconds=None):
@@ -46,9 +48,17 @@ def _row(name, image, reference, masks, seconds, bake_seconds=None):
             "seconds": seconds, "bake": bake_seconds}
 
 
-def measure(hdri, folder, reference_samples, eevee=False):
-    path = Path(bpy.utils.system_resource("DATAFILES", path="studiolights/world")) / f"{hdri}.exr"
-    roles = build_scene(path)
+def hdri_path(hdri):
+    """``hdri``: a file, or the name of one of Blender's studio-light HDRIs."""
+    if Path(hdri).is_file():
+        return Path(hdri)
+    return Path(bpy.utils.system_resource("DATAFILES", path="studiolights/world")) / f"{hdri}.exr"
+
+
+def measure(hdri, folder, reference_samples, eevee=False, size=SIZE):
+    path = hdri_path(hdri)
+    hdri = path.stem
+    roles = build_scene(path, size)
     scene = bpy.context.scene
     masks = id_masks(scene, roles, folder)
     objects = [o for group in roles.values() for o in group]
@@ -61,7 +71,7 @@ def measure(hdri, folder, reference_samples, eevee=False):
     if eevee:
         seconds, image = _render(scene, f"{stem}_eevee_world.exr", compat.eevee_engine_id())
         rows.append(_row("EEVEE, world (no add-on)", image, reference, masks, seconds))
-    notes = []
+    notes = [f"contact region: {int(masks['contact'].sum())} pixels"]
     for store in ("CORNERS", "AUTO"):
         # As an artist works: Extract Lights, then the bake (which bakes the lamps' bounce
         # for EEVEE), then Apply
@@ -90,12 +100,13 @@ def measure(hdri, folder, reference_samples, eevee=False):
     return rows, notes
 
 
-def section(results, load, elapsed, reference_samples):
+def section(results, load, elapsed, reference_samples, size):
     lines = [
         "## Transfer on a plain floor: per corner and per texel", "",
         f"`python -m benchmarks.bench_texel` (the scene of `bench_eevee_default`: a plain "
         f"4-vertex 8 m floor, a cube, a UV sphere, a Suzanne; reference Cycles path tracing of "
-        f"the world, {reference_samples} spp; Cycles at {SAMPLES} spp, the bake at "
+        f"the world, {reference_samples} spp; {size[0]} × {size[1]} pixels; Cycles at "
+        f"{SAMPLES} spp, the bake at "
         f"{BAKE_SAMPLES}; load average {load}; {elapsed:.0f} s in all). Error: relative RMSE "
         "over the floor and objects, over the objects alone (the cube, sphere and Suzanne: the "
         "issue's diffuse-object error), and over the floor's contact region (below half the "
@@ -105,7 +116,7 @@ def section(results, load, elapsed, reference_samples):
     ]
     for hdri, (rows, notes) in results.items():
         base = rows[0]["contact"]
-        lines += [f"**{hdri}.exr**", "",
+        lines += [f"**{hdri}**", "",
                   "| method | error | objects err | contact err | contact × | bright | render "
                   "| bake |",
                   "|---|---|---|---|---|---|---|---|"]
@@ -121,20 +132,24 @@ def section(results, load, elapsed, reference_samples):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--hdris", nargs="*", default=list(HDRIS))
+    parser.add_argument("--hdris", nargs="*", default=list(HDRIS),
+                        help="names of Blender's studio-light HDRIs, or HDRI files")
     parser.add_argument("--reference-samples", type=int, default=REFERENCE_SAMPLES)
     parser.add_argument("--eevee", action="store_true",
-                        help="also EEVEE rows (its own world, Transfer by Default): minutes "
-                        "of shader compiles under software OpenGL")
+                        help="also EEVEE rows (its own world, Transfer by Default)")
+    parser.add_argument("--size", nargs=2, type=int, default=list(SIZE), metavar=("W", "H"),
+                        help="render size in pixels")
     parser.add_argument("--no-write", action="store_true", help="print only")
     args = parser.parse_args(argv)
     started, load = time.perf_counter(), ", ".join(f"{v:.1f}" for v in os.getloadavg())
     results = {}
     with tempfile.TemporaryDirectory() as folder:
         for hdri in args.hdris:
-            results[hdri] = measure(hdri, folder, args.reference_samples, args.eevee)
+            results[hdri_path(hdri).name] = measure(hdri, folder, args.reference_samples,
+                                                    args.eevee, tuple(args.size))
     load += " at the start, " + ", ".join(f"{v:.1f}" for v in os.getloadavg()) + " at the end"
-    text = section(results, load, time.perf_counter() - started, args.reference_samples)
+    text = section(results, load, time.perf_counter() - started, args.reference_samples,
+                   args.size)
     print(text)
     if not args.no_write:
         fragments.write("texel", text)
