@@ -2,8 +2,8 @@
 
 albedo = Σ_leaves Π_path (Fac or 1 − Fac) · colour · w over the diffuse leaves of the Surface
 (``diffuse_weight.surface_leaves``): w = 1 for a Diffuse BSDF; for a Principled BSDF
-w = Alpha · (1 − Metallic) · (1 − Transmission Weight) · (1 − F0), F0 = ((η − 1)/(η + 1))² · 2 s
-with s the Specular IOR Level (left out in "EMISSION"), as Cycles layers it. Each input is
+w = Alpha · (1 − Metallic) · (1 − Transmission Weight) · (1 − F0), F0 = ((η − 1)/(η + 1))² · 2s
+with s its Specular IOR Level (left out in "EMISSION"), as Cycles layers it. Each input is
 linked to the same source, or to a Value/RGB node holding its value (with its keyframes and
 drivers) that feeds both the BSDF and the SH term; ``release`` puts the values back. Details:
 docs/modules.md.
