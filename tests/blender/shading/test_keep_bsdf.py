@@ -194,11 +194,10 @@ def test_world_hidden_diffuse_by_user_stays_hidden(studio):
     assert s.world.cycles_visibility.diffuse is False
 
 
-def test_principled_weight_follows_metallic_transmission_and_ior(studio):
-    s = studio
-    material = principled_material("P", Metallic=0.25, IOR=1.5)
-    bsdf = material.node_tree.nodes["Principled BSDF"]
-    bsdf.inputs["Transmission Weight"].default_value = 0.2
+def _rendered_weight(s, material):
+    """The diffuse weight Keep BSDF gives ``material`` on the sphere alone: its render (world
+    reflections and SH seen in itself kept out) over that of a white Principled's SH emission
+    (Emission Only)."""
     s.sphere.data.materials[0] = material
     materials.apply_to_materials([material], s.scene)
     s.sun.hide_render = s.plane.hide_render = True
@@ -206,12 +205,19 @@ def test_principled_weight_follows_metallic_transmission_and_ior(studio):
     s.sphere.visible_glossy = s.sphere.visible_transmission = False  # no SH seen in itself
     _, image = s.render(1)
     mask = covered(image)
-    # against the SH emission of white (a plain white Principled in Emission Only mode)
     white_material = principled_material("White")
     s.sphere.data.materials[0] = white_material
     materials.apply_to_materials([white_material], s.scene, mode="EMISSION")
     _, white = s.render(1)
-    ratio = image[mask][:, :3].sum() / white[mask][:, :3].sum()
+    return image[mask][:, :3].sum() / white[mask][:, :3].sum()
+
+
+def test_principled_weight_follows_metallic_transmission_and_ior(studio):
+    s = studio
+    material = principled_material("P", Metallic=0.25, IOR=1.5)
+    bsdf = material.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Transmission Weight"].default_value = 0.2
+    ratio = _rendered_weight(s, material)
     expected = 0.75 * 0.8 * (1.0 - 0.04)
     print(f"\nPrincipled diffuse weight rendered {ratio:.5f}, expected {expected:.5f}")
     # 5.0: exactly the weight; 4.2 renders 0.2 % more (0.57737 measured)
@@ -225,19 +231,7 @@ def test_principled_weight_follows_metallic_transmission_and_ior(studio):
 def test_principled_weight_follows_the_specular_ior_level(studio, level):
     """Cycles scales F0 by 2 × Specular IOR Level; the diffuse weight is 1 − that F0."""
     s = studio
-    material = principled_material("P", IOR=1.5, Specular_IOR_Level=level)
-    s.sphere.data.materials[0] = material
-    materials.apply_to_materials([material], s.scene)
-    s.sun.hide_render = s.plane.hide_render = True
-    s.world.cycles_visibility.glossy = s.world.cycles_visibility.transmission = False
-    s.sphere.visible_glossy = s.sphere.visible_transmission = False
-    _, image = s.render(1)
-    mask = covered(image)
-    white_material = principled_material("White")
-    s.sphere.data.materials[0] = white_material
-    materials.apply_to_materials([white_material], s.scene, mode="EMISSION")
-    _, white = s.render(1)
-    ratio = image[mask][:, :3].sum() / white[mask][:, :3].sum()
+    ratio = _rendered_weight(s, principled_material("P", IOR=1.5, Specular_IOR_Level=level))
     expected = 1.0 - 0.04 * 2.0 * level
     print(f"\nSpecular IOR Level {level}: diffuse weight rendered {ratio:.5f}, expected "
           f"{expected:.5f}")
